@@ -1,0 +1,2 @@
+//! The `dsc-seg` command line.
+fn main() {}

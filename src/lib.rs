@@ -1,0 +1,12 @@
+//! dsc-seg: multiphase image segmentation with the deformable simplicial complex.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+#![deny(rustdoc::broken_intra_doc_links)]
+
+pub mod complex;
+pub mod dim;
+pub mod dsc;
+pub mod io;
+pub mod ops;
+pub mod phantom;
+pub mod segment;
