@@ -1,1 +1,285 @@
-//! TODO
+//! The simplicial complex: connectivity, labels, classification and validation.
+//!
+//! Each cell stores its `N + 1` vertices (positively oriented) and the neighbour
+//! across the facet opposite each of them (the CGAL/TetGen layout); each vertex
+//! stores one incident cell. Facets and edges stay implicit. This module knows
+//! nothing of images or forces.
+
+mod build;
+mod cavity;
+mod class;
+mod ids;
+mod measure;
+mod validate;
+
+pub use cavity::Rejection;
+pub use class::{VertexClass, VertexKind};
+pub use ids::{CellId, Label, VertexId};
+pub use validate::Finding;
+
+use crate::dim::{Dim, Point, D2, D3};
+
+/// A labelled simplicial complex filling an axis-aligned box (the image domain).
+#[derive(Clone, Debug)]
+pub struct Complex<K: Dim> {
+    positions: Vec<K::Point>,
+    /// One incident live cell per vertex; `None` for a removed vertex.
+    vertex_cell: Vec<Option<CellId>>,
+    classes: Vec<VertexClass>,
+    cells: Vec<K::Cell>,
+    neighbours: Vec<K::Neighbours>,
+    labels: Vec<Label>,
+    alive: Vec<bool>,
+    live_cells: usize,
+    live_vertices: usize,
+    domain_min: K::Point,
+    domain_max: K::Point,
+}
+
+/// A triangle complex.
+pub type Complex2 = Complex<D2>;
+/// A tetrahedral complex.
+pub type Complex3 = Complex<D3>;
+
+impl<K: Dim> Complex<K> {
+    /// Position of a vertex.
+    #[inline]
+    pub fn position(&self, v: VertexId) -> K::Point {
+        self.positions[v.index()]
+    }
+    /// Vertices of a cell.
+    #[inline]
+    pub fn cell(&self, c: CellId) -> &[VertexId] {
+        self.cells[c.index()].as_ref()
+    }
+    /// Neighbours of a cell, opposite each local vertex.
+    #[inline]
+    pub fn neighbours(&self, c: CellId) -> &[Option<CellId>] {
+        self.neighbours[c.index()].as_ref()
+    }
+    /// Phase label of a cell.
+    #[inline]
+    pub fn label(&self, c: CellId) -> Label {
+        self.labels[c.index()]
+    }
+    /// Classification of a vertex (kept current by every operation).
+    #[inline]
+    pub fn class(&self, v: VertexId) -> VertexClass {
+        self.classes[v.index()]
+    }
+    /// Whether a cell id refers to a live cell.
+    #[inline]
+    pub fn is_alive(&self, c: CellId) -> bool {
+        self.alive[c.index()]
+    }
+    /// Whether a vertex id refers to a live vertex.
+    #[inline]
+    pub fn is_vertex_alive(&self, v: VertexId) -> bool {
+        self.vertex_cell[v.index()].is_some()
+    }
+    /// Number of live cells.
+    pub fn cell_count(&self) -> usize {
+        self.live_cells
+    }
+    /// Number of live vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.live_vertices
+    }
+    /// Upper bound of vertex ids (length of per-vertex arrays).
+    pub fn vertex_capacity(&self) -> usize {
+        self.positions.len()
+    }
+    /// Upper bound of cell ids (length of per-cell arrays).
+    pub fn cell_capacity(&self) -> usize {
+        self.cells.len()
+    }
+    /// Live cell ids.
+    pub fn cell_ids(&self) -> impl Iterator<Item = CellId> + '_ {
+        (0..self.cells.len() as u32)
+            .map(CellId)
+            .filter(|c| self.alive[c.index()])
+    }
+    /// Live vertex ids.
+    pub fn vertex_ids(&self) -> impl Iterator<Item = VertexId> + '_ {
+        (0..self.positions.len() as u32)
+            .map(VertexId)
+            .filter(|v| self.vertex_cell[v.index()].is_some())
+    }
+    /// The domain box `(min, max)`.
+    pub fn domain(&self) -> (K::Point, K::Point) {
+        (self.domain_min, self.domain_max)
+    }
+    /// Corner positions of a cell.
+    pub fn cell_points(&self, c: CellId) -> [K::Point; 4] {
+        let mut out = [K::Point::zero(); 4];
+        for (o, v) in out.iter_mut().zip(self.cell(c)) {
+            *o = self.positions[v.index()];
+        }
+        out
+    }
+    /// Signed area/volume of a cell.
+    pub fn measure(&self, c: CellId) -> f64 {
+        K::signed_measure(&self.cell_points(c)[..K::NV])
+    }
+    /// Quality in `[0, 1]` of a cell (see [`Dim::quality`]).
+    pub fn quality(&self, c: CellId) -> f64 {
+        K::quality(&self.cell_points(c)[..K::NV])
+    }
+    /// Whether the facet opposite local vertex `i` of `c` separates two phases.
+    pub fn is_interface_facet(&self, c: CellId, i: usize) -> bool {
+        match self.neighbours(c)[i] {
+            Some(nb) => self.labels[nb.index()] != self.labels[c.index()],
+            None => false,
+        }
+    }
+    /// Local index of vertex `v` in cell `c`.
+    pub fn local_index(&self, c: CellId, v: VertexId) -> Option<usize> {
+        self.cell(c).iter().position(|&w| w == v)
+    }
+    /// One live cell incident to `v`.
+    pub fn incident_cell(&self, v: VertexId) -> Option<CellId> {
+        self.vertex_cell[v.index()]
+    }
+
+    /// Collects the cells incident to `v` into `out` (cleared first), by walking
+    /// across facets that contain `v`.
+    pub fn star_into(&self, v: VertexId, out: &mut Vec<CellId>) {
+        out.clear();
+        let Some(start) = self.vertex_cell[v.index()] else {
+            return;
+        };
+        out.push(start);
+        let mut next = 0;
+        while next < out.len() {
+            let c = out[next];
+            next += 1;
+            let verts = self.cell(c);
+            for (i, nb) in self.neighbours(c).iter().enumerate() {
+                if verts[i] == v {
+                    continue;
+                }
+                if let Some(nb) = *nb {
+                    if !out.contains(&nb) {
+                        out.push(nb);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Collects the vertices adjacent to `v` (its link vertices) into `out`.
+    pub fn neighbours_of_vertex(
+        &self,
+        v: VertexId,
+        star: &mut Vec<CellId>,
+        out: &mut Vec<VertexId>,
+    ) {
+        self.star_into(v, star);
+        out.clear();
+        for &c in star.iter() {
+            for &w in self.cell(c) {
+                if w != v && !out.contains(&w) {
+                    out.push(w);
+                }
+            }
+        }
+    }
+
+    /// Collects the live cells containing both `u` and `v` into `out`.
+    pub fn cells_of_edge(
+        &self,
+        u: VertexId,
+        v: VertexId,
+        star: &mut Vec<CellId>,
+        out: &mut Vec<CellId>,
+    ) {
+        self.star_into(u, star);
+        out.clear();
+        out.extend(star.iter().copied().filter(|&c| self.cell(c).contains(&v)));
+    }
+
+    /// Sets the label of one cell and reclassifies its vertices.
+    pub fn set_label(&mut self, c: CellId, label: Label) {
+        if self.labels[c.index()] != label {
+            self.labels[c.index()] = label;
+            self.reclassify_cells(&[c]);
+        }
+    }
+
+    /// Sets many labels at once (one reclassification pass).
+    pub fn set_labels(&mut self, changes: &[(CellId, Label)]) {
+        for &(c, l) in changes {
+            self.labels[c.index()] = l;
+        }
+        let cells: Vec<CellId> = changes.iter().map(|&(c, _)| c).collect();
+        self.reclassify_cells(&cells);
+    }
+
+    /// Moves a vertex without any check. Callers must keep every cell positive
+    /// ([`Complex::move_towards`](crate::ops) does).
+    pub(crate) fn set_position(&mut self, v: VertexId, p: K::Point) {
+        self.positions[v.index()] = p;
+    }
+
+    /// The largest label in use plus one.
+    pub fn label_count(&self) -> usize {
+        self.cell_ids()
+            .map(|c| self.labels[c.index()] as usize + 1)
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Removes dead vertices and cells and renumbers the rest densely, returning
+    /// the old-to-new vertex and cell maps. Invalidates every id held outside.
+    pub fn compact(&mut self) -> (Vec<Option<VertexId>>, Vec<Option<CellId>>) {
+        let mut vmap = vec![None; self.positions.len()];
+        let mut n = 0u32;
+        for (i, slot) in vmap.iter_mut().enumerate() {
+            if self.vertex_cell[i].is_some() {
+                *slot = Some(VertexId(n));
+                n += 1;
+            }
+        }
+        let mut cmap = vec![None; self.cells.len()];
+        let mut m = 0u32;
+        for (i, slot) in cmap.iter_mut().enumerate() {
+            if self.alive[i] {
+                *slot = Some(CellId(m));
+                m += 1;
+            }
+        }
+        let keep_v: Vec<usize> = (0..self.positions.len())
+            .filter(|&i| vmap[i].is_some())
+            .collect();
+        self.positions = keep_v.iter().map(|&i| self.positions[i]).collect();
+        self.classes = keep_v.iter().map(|&i| self.classes[i]).collect();
+        self.vertex_cell = keep_v
+            .iter()
+            .map(|&i| self.vertex_cell[i].and_then(|c| cmap[c.index()]))
+            .collect();
+        let keep_c: Vec<usize> = (0..self.cells.len()).filter(|&i| self.alive[i]).collect();
+        self.cells = keep_c
+            .iter()
+            .map(|&i| {
+                let mut cell = self.cells[i];
+                for v in cell.as_mut() {
+                    *v = vmap[v.index()].expect("live cell references a live vertex");
+                }
+                cell
+            })
+            .collect();
+        self.neighbours = keep_c
+            .iter()
+            .map(|&i| {
+                let mut nb = self.neighbours[i];
+                for n in nb.as_mut() {
+                    *n = n.and_then(|c| cmap[c.index()]);
+                }
+                nb
+            })
+            .collect();
+        self.labels = keep_c.iter().map(|&i| self.labels[i]).collect();
+        self.alive = vec![true; keep_c.len()];
+        (vmap, cmap)
+    }
+}

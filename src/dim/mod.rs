@@ -1,1 +1,63 @@
-//! TODO
+//! Dimensions: the one generic axis of the crate.
+//!
+//! Everything that differs between triangles and tetrahedra (point type, the
+//! fixed-size vertex and neighbour arrays of a cell, exact orientation, measure,
+//! quality) sits behind the sealed [`Dim`] trait, implemented by the zero-sized
+//! [`D2`] and [`D3`]. The complex, the mesh operations and the deform loop are
+//! written once against it.
+
+mod d2;
+mod d3;
+mod point;
+
+pub use d2::D2;
+pub use d3::D3;
+pub use point::Point;
+
+use crate::complex::{CellId, VertexId};
+use std::fmt::Debug;
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for super::D2 {}
+    impl Sealed for super::D3 {}
+}
+
+/// A spatial dimension (2 or 3) with the cell shape that fills it.
+pub trait Dim: sealed::Sealed + Copy + Clone + Debug + Default + Send + Sync + 'static {
+    /// Spatial dimension.
+    const N: usize;
+    /// Vertices per cell (`N + 1`).
+    const NV: usize = Self::N + 1;
+    /// A point or vector of the space.
+    type Point: Point;
+    /// The `N + 1` vertices of a cell, positively oriented.
+    type Cell: Copy + Debug + PartialEq + Send + Sync + AsRef<[VertexId]> + AsMut<[VertexId]>;
+    /// Neighbour across the facet opposite each local vertex; `None` on the domain boundary.
+    type Neighbours: Copy
+        + Debug
+        + PartialEq
+        + Send
+        + Sync
+        + AsRef<[Option<CellId>]>
+        + AsMut<[Option<CellId>]>;
+
+    /// Builds a cell from exactly `NV` vertex ids.
+    fn cell(vertices: &[VertexId]) -> Self::Cell;
+    /// A neighbour array with every entry `None`.
+    fn no_neighbours() -> Self::Neighbours;
+    /// Exact orientation test of a cell's `NV` corners: positive when the cell is
+    /// positively oriented, zero when degenerate. The sign is exact (adaptive
+    /// precision); the magnitude is a multiple of the measure.
+    fn orient(p: &[Self::Point]) -> f64;
+    /// Signed area (2D) or volume (3D) in floating point.
+    fn signed_measure(p: &[Self::Point]) -> f64;
+    /// Shape quality in `[0, 1]`, 1 for the regular simplex, 0 when degenerate.
+    fn quality(p: &[Self::Point]) -> f64;
+    /// Measure of the regular cell with edge length `l` (A or V of the method doc).
+    fn regular_measure(l: f64) -> f64;
+    /// Unit normal of the facet opposite corner `opposite`, pointing away from that corner.
+    fn facet_normal(p: &[Self::Point], opposite: usize) -> Self::Point;
+    /// Measure (length or area) of the facet opposite corner `opposite`.
+    fn facet_measure(p: &[Self::Point], opposite: usize) -> f64;
+}

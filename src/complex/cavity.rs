@@ -1,0 +1,199 @@
+//! The one primitive behind every local mesh operation: replace a set of cells
+//! (a cavity) by new cells filling the same region.
+//!
+//! Split, collapse and every flip are expressed as "these old cells go, these new
+//! cells come". The primitive checks that the new cells are positively oriented
+//! (exact predicate) and that their facets glue into a manifold exactly along the
+//! cavity's boundary, then rewires the neighbours. A collapse that violates the
+//! link condition shows up here as an unmatched or over-matched facet, so no
+//! operation can silently break the complex.
+
+use super::{CellId, Complex, Label, VertexId};
+use crate::dim::{Dim, Point};
+use serde::Serialize;
+
+/// Why a local operation was not carried out. Rejections are normal control flow.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Rejection {
+    /// A resulting cell would be inverted or degenerate.
+    WouldInvert,
+    /// The new cells do not glue into a manifold along the cavity boundary
+    /// (e.g. the link condition of a collapse fails).
+    NonManifold,
+    /// Two boundary vertices not joined by a boundary facet: collapsing would pinch the domain.
+    BoundaryPinch,
+    /// The operation would change the interface where that is not allowed
+    /// (safe mode), or move a fixed vertex.
+    Constrained,
+    /// The result would be below the required quality.
+    LowQuality,
+    /// The element no longer exists or the request does not describe one.
+    Stale,
+    /// No position or configuration satisfies the geometric constraints.
+    NoCandidate,
+}
+
+/// Sorted facet key: the facet's vertex ids, padded with `u32::MAX`.
+pub(crate) type FacetKey = [u32; 3];
+
+pub(crate) fn facet_key(cell: &[VertexId], opposite: usize) -> FacetKey {
+    let mut key = [u32::MAX; 3];
+    let mut n = 0;
+    for (i, v) in cell.iter().enumerate() {
+        if i != opposite {
+            key[n] = v.0;
+            n += 1;
+        }
+    }
+    key[..n].sort_unstable();
+    key
+}
+
+impl<K: Dim> Complex<K> {
+    /// Adds an unattached vertex (it becomes live when a new cell uses it).
+    pub(crate) fn add_vertex(&mut self, p: K::Point) -> VertexId {
+        let id = VertexId(self.positions.len() as u32);
+        self.positions.push(p);
+        self.vertex_cell.push(None);
+        self.classes.push(super::VertexClass {
+            kind: super::VertexKind::Interior,
+            boundary: 0,
+        });
+        id
+    }
+
+    /// Whether all the given (vertex tuple) cells are positively oriented at current positions.
+    pub(crate) fn all_positive(&self, cells: &[(K::Cell, Label)]) -> bool {
+        cells.iter().all(|(cell, _)| {
+            let mut p = [K::Point::zero(); 4];
+            for (o, v) in p.iter_mut().zip(cell.as_ref()) {
+                *o = self.positions[v.index()];
+            }
+            K::orient(&p[..K::NV]) > 0.0
+        })
+    }
+
+    /// Replaces the cells `old` by `new`. On success the ids of the new cells are
+    /// appended to `created`. On rejection nothing changes.
+    pub(crate) fn replace_cells(
+        &mut self,
+        old: &[CellId],
+        new: &[(K::Cell, Label)],
+        created: &mut Vec<CellId>,
+    ) -> Result<(), Rejection> {
+        if old.iter().any(|&c| !self.is_alive(c)) {
+            return Err(Rejection::Stale);
+        }
+        if !self.all_positive(new) {
+            return Err(Rejection::WouldInvert);
+        }
+        // Facets on the cavity boundary, with the cell outside (None: domain boundary).
+        let mut outside: Vec<(FacetKey, Option<CellId>, bool)> =
+            Vec::with_capacity(old.len() * K::NV);
+        for &c in old {
+            for i in 0..K::NV {
+                let nb = self.neighbours(c)[i];
+                if nb.is_none_or(|n| !old.contains(&n)) {
+                    outside.push((facet_key(self.cell(c), i), nb, false));
+                }
+            }
+        }
+        outside.sort_unstable_by_key(|e| e.0);
+        // Facets of the new cells: (key, new cell index, local index).
+        let mut facets: Vec<(FacetKey, usize, usize)> = Vec::with_capacity(new.len() * K::NV);
+        for (j, (cell, _)) in new.iter().enumerate() {
+            for i in 0..K::NV {
+                facets.push((facet_key(cell.as_ref(), i), j, i));
+            }
+        }
+        facets.sort_unstable_by_key(|e| e.0);
+        let mut links: Vec<K::Neighbours> = vec![K::no_neighbours(); new.len()];
+        let base = self.cells.len() as u32;
+        let mut external: Vec<(usize, usize, usize)> = Vec::new(); // (new j, local i, outside index)
+        let mut k = 0;
+        while k < facets.len() {
+            let mut end = k + 1;
+            while end < facets.len() && facets[end].0 == facets[k].0 {
+                end += 1;
+            }
+            match end - k {
+                1 => {
+                    let (key, j, i) = facets[k];
+                    let Ok(pos) = outside.binary_search_by_key(&key, |e| e.0) else {
+                        return Err(Rejection::NonManifold);
+                    };
+                    if outside[pos].2 {
+                        return Err(Rejection::NonManifold);
+                    }
+                    outside[pos].2 = true;
+                    external.push((j, i, pos));
+                }
+                2 => {
+                    let (_, j1, i1) = facets[k];
+                    let (_, j2, i2) = facets[k + 1];
+                    if j1 == j2 {
+                        return Err(Rejection::NonManifold);
+                    }
+                    links[j1].as_mut()[i1] = Some(CellId(base + j2 as u32));
+                    links[j2].as_mut()[i2] = Some(CellId(base + j1 as u32));
+                }
+                _ => return Err(Rejection::NonManifold),
+            }
+            k = end;
+        }
+        if outside.iter().any(|e| !e.2) {
+            return Err(Rejection::NonManifold);
+        }
+        // Commit.
+        for &c in old {
+            self.alive[c.index()] = false;
+        }
+        self.live_cells -= old.len();
+        for &(j, i, pos) in &external {
+            let (key, nb, _) = outside[pos];
+            links[j].as_mut()[i] = nb;
+            if let Some(nb) = nb {
+                let local = (0..K::NV)
+                    .find(|&l| facet_key(self.cell(nb), l) == key)
+                    .expect("outside cell shares the facet");
+                self.neighbours[nb.index()].as_mut()[local] = Some(CellId(base + j as u32));
+            }
+        }
+        for (j, (cell, label)) in new.iter().enumerate() {
+            let id = CellId(base + j as u32);
+            self.cells.push(*cell);
+            self.neighbours.push(links[j]);
+            self.labels.push(*label);
+            self.alive.push(true);
+            created.push(id);
+            for &v in cell.as_ref() {
+                if self.vertex_cell[v.index()].is_none() {
+                    self.live_vertices += 1;
+                }
+                self.vertex_cell[v.index()] = Some(id);
+            }
+        }
+        self.live_cells += new.len();
+        // Vertices whose recorded cell died and that no new cell uses.
+        for &c in old {
+            for i in 0..K::NV {
+                let v = self.cells[c.index()].as_ref()[i];
+                if self.vertex_cell[v.index()].is_some_and(|vc| !self.alive[vc.index()]) {
+                    let replacement = old
+                        .iter()
+                        .flat_map(|&o| self.neighbours[o.index()].as_ref().iter().flatten())
+                        .copied()
+                        .find(|&n| self.alive[n.index()] && self.cell(n).contains(&v));
+                    if replacement.is_none() {
+                        self.live_vertices -= 1;
+                    }
+                    self.vertex_cell[v.index()] = replacement;
+                }
+            }
+        }
+        let start = created.len() - new.len();
+        let fresh: Vec<CellId> = created[start..].to_vec();
+        self.reclassify_cells(&fresh);
+        Ok(())
+    }
+}

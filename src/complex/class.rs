@@ -1,0 +1,136 @@
+//! Vertex classification: interior, interface, junction, and domain boundary.
+
+use super::{Complex, Label, VertexId};
+use crate::dim::Dim;
+use serde::{Deserialize, Serialize};
+
+/// How a vertex sits relative to the phase interface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum VertexKind {
+    /// Every cell around the vertex has the same phase.
+    Interior,
+    /// The star splits into exactly two same-phase pieces: a point of one curve (2D) or sheet (3D).
+    Interface,
+    /// Three or more same-phase pieces meet: a triple junction, or a crossing where a
+    /// phase occurs twice (2D checkerboard corner, 3D junction curve).
+    Junction,
+}
+
+/// The class of a vertex: its interface kind and which domain-box faces it lies on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct VertexClass {
+    /// Relation to the interface.
+    pub kind: VertexKind,
+    /// Bit `2·axis` set: on the box face `x_axis = min`; bit `2·axis + 1`: on `x_axis = max`.
+    pub boundary: u8,
+}
+
+impl VertexClass {
+    /// Whether the vertex lies on the domain boundary.
+    pub fn on_boundary(self) -> bool {
+        self.boundary != 0
+    }
+    /// Whether the vertex lies on the interface (including junctions).
+    pub fn on_interface(self) -> bool {
+        self.kind != VertexKind::Interior
+    }
+    /// Whether the vertex may not move at all: a corner of the domain box in every axis.
+    pub fn pinned_axes(self) -> u8 {
+        let mut axes = 0;
+        for axis in 0..3 {
+            if self.boundary & (0b11 << (2 * axis)) != 0 {
+                axes |= 1 << axis;
+            }
+        }
+        axes
+    }
+}
+
+impl<K: Dim> Complex<K> {
+    /// Which box faces `p` lies on (exact comparison: boundary vertices are kept exactly on the box).
+    pub(crate) fn boundary_mask(&self, p: &K::Point) -> u8 {
+        let mut mask = 0;
+        for axis in 0..K::N {
+            if p[axis] == self.domain_min[axis] {
+                mask |= 1 << (2 * axis);
+            }
+            if p[axis] == self.domain_max[axis] {
+                mask |= 1 << (2 * axis + 1);
+            }
+        }
+        mask
+    }
+
+    /// Recomputes the class of `v` from the labels around it.
+    pub(crate) fn compute_class(&self, v: VertexId) -> VertexClass {
+        let pieces = self.count_phase_pieces(v);
+        let kind = match pieces {
+            0 | 1 => VertexKind::Interior,
+            2 => VertexKind::Interface,
+            _ => VertexKind::Junction,
+        };
+        VertexClass {
+            kind,
+            boundary: self.boundary_mask(&self.positions[v.index()]),
+        }
+    }
+
+    /// Number of connected same-label pieces of the star of `v` (connected through facets containing `v`).
+    pub fn count_phase_pieces(&self, v: VertexId) -> usize {
+        let mut star = Vec::new();
+        self.star_into(v, &mut star);
+        let mut piece = vec![usize::MAX; star.len()];
+        let mut pieces = 0;
+        let mut stack = Vec::new();
+        for start in 0..star.len() {
+            if piece[start] != usize::MAX {
+                continue;
+            }
+            piece[start] = pieces;
+            stack.push(start);
+            while let Some(i) = stack.pop() {
+                let c = star[i];
+                let label = self.labels[c.index()];
+                for (local, nb) in self.neighbours(c).iter().enumerate() {
+                    let Some(nb) = nb else { continue };
+                    if self.cells[c.index()].as_ref()[local] == v
+                        || self.labels[nb.index()] != label
+                    {
+                        continue;
+                    }
+                    if let Some(j) = star.iter().position(|s| s == nb) {
+                        if piece[j] == usize::MAX {
+                            piece[j] = pieces;
+                            stack.push(j);
+                        }
+                    }
+                }
+            }
+            pieces += 1;
+        }
+        pieces
+    }
+
+    /// Distinct labels around `v`, in increasing order.
+    pub fn labels_around(&self, v: VertexId, out: &mut Vec<Label>) {
+        let mut star = Vec::new();
+        self.star_into(v, &mut star);
+        out.clear();
+        out.extend(star.iter().map(|c| self.labels[c.index()]));
+        out.sort_unstable();
+        out.dedup();
+    }
+
+    /// Recomputes the class of every live vertex of the given cells.
+    pub(crate) fn reclassify_cells(&mut self, cells: &[super::CellId]) {
+        for &c in cells {
+            if !self.is_alive(c) {
+                continue;
+            }
+            for i in 0..K::NV {
+                let v = self.cells[c.index()].as_ref()[i];
+                self.classes[v.index()] = self.compute_class(v);
+            }
+        }
+    }
+}

@@ -1,0 +1,74 @@
+use super::Dim;
+use crate::complex::{CellId, VertexId};
+use nalgebra::Vector3;
+
+/// Three dimensions: tetrahedra over a volume.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct D3;
+
+fn coord(p: &Vector3<f64>) -> robust::Coord3D<f64> {
+    robust::Coord3D {
+        x: p.x,
+        y: p.y,
+        z: p.z,
+    }
+}
+
+impl Dim for D3 {
+    const N: usize = 3;
+    type Point = Vector3<f64>;
+    type Cell = [VertexId; 4];
+    type Neighbours = [Option<CellId>; 4];
+
+    fn cell(v: &[VertexId]) -> Self::Cell {
+        [v[0], v[1], v[2], v[3]]
+    }
+    fn no_neighbours() -> Self::Neighbours {
+        [None; 4]
+    }
+    /// `robust::orient3d` is positive when `d` lies below the plane of `a, b, c`;
+    /// we negate it so that positive means `det[b-a, c-a, d-a] > 0`, like 2D.
+    fn orient(p: &[Self::Point]) -> f64 {
+        -robust::orient3d(coord(&p[0]), coord(&p[1]), coord(&p[2]), coord(&p[3]))
+    }
+    fn signed_measure(p: &[Self::Point]) -> f64 {
+        (p[1] - p[0]).cross(&(p[2] - p[0])).dot(&(p[3] - p[0])) / 6.0
+    }
+    /// q = 6·sqrt(2)·V / l_rms³, the method doc's tet quality (1 for the regular tet).
+    fn quality(p: &[Self::Point]) -> f64 {
+        if Self::orient(p) <= 0.0 {
+            return 0.0;
+        }
+        let mut sum_sq = 0.0;
+        for i in 0..4 {
+            for j in i + 1..4 {
+                sum_sq += (p[i] - p[j]).norm_squared();
+            }
+        }
+        let l_rms = (sum_sq / 6.0).sqrt();
+        (6.0 * 2f64.sqrt() * Self::signed_measure(p) / (l_rms * l_rms * l_rms)).clamp(0.0, 1.0)
+    }
+    fn regular_measure(l: f64) -> f64 {
+        2f64.sqrt() / 12.0 * l * l * l
+    }
+    fn facet_normal(p: &[Self::Point], opposite: usize) -> Self::Point {
+        let (a, b, c) = facet_corners(p, opposite);
+        let mut n = (b - a).cross(&(c - a));
+        if n.dot(&(p[opposite] - a)) > 0.0 {
+            n = -n;
+        }
+        n.normalize()
+    }
+    fn facet_measure(p: &[Self::Point], opposite: usize) -> f64 {
+        let (a, b, c) = facet_corners(p, opposite);
+        0.5 * (b - a).cross(&(c - a)).norm()
+    }
+}
+
+fn facet_corners(
+    p: &[Vector3<f64>],
+    opposite: usize,
+) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+    let mut it = (0..4).filter(|&i| i != opposite).map(|i| p[i]);
+    (it.next().unwrap(), it.next().unwrap(), it.next().unwrap())
+}

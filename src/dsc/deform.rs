@@ -1,0 +1,111 @@
+//! `deform`: move vertices towards destinations, improving the mesh between rounds.
+
+use super::improve::ImproveStats;
+use super::resize::ResizeStats;
+use super::{Connectivity, DscParams};
+use crate::complex::{Complex, VertexId};
+use crate::dim::Dim;
+use crate::ops::MoveOutcome;
+use serde::Serialize;
+
+/// Destinations for some vertices, indexed by vertex id.
+#[derive(Clone, Debug)]
+pub struct Destinations<K: Dim> {
+    targets: Vec<Option<K::Point>>,
+}
+
+impl<K: Dim> Destinations<K> {
+    /// No destinations, sized for `complex`.
+    pub fn new(complex: &Complex<K>) -> Self {
+        Destinations {
+            targets: vec![None; complex.vertex_capacity()],
+        }
+    }
+    /// Sets the destination of `v`.
+    pub fn set(&mut self, v: VertexId, p: K::Point) {
+        if v.index() >= self.targets.len() {
+            self.targets.resize(v.index() + 1, None);
+        }
+        self.targets[v.index()] = Some(p);
+    }
+    /// The destination of `v`, if any.
+    pub fn get(&self, v: VertexId) -> Option<K::Point> {
+        self.targets.get(v.index()).copied().flatten()
+    }
+    /// Removes every destination (keeps the allocation).
+    pub fn clear(&mut self) {
+        self.targets.iter_mut().for_each(|t| *t = None);
+    }
+    /// Vertices that have a destination.
+    pub fn len(&self) -> usize {
+        self.targets.iter().filter(|t| t.is_some()).count()
+    }
+    /// Whether no vertex has a destination.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// What one `deform` call did.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct DeformReport {
+    /// Move-and-improve rounds run.
+    pub rounds: usize,
+    /// Vertices that reached their destination.
+    pub arrived: usize,
+    /// Vertices that stopped short (blocked, collapsed away or out of rounds); not an error.
+    pub stopped_short: usize,
+    /// Improvement counts, summed over rounds and the final resize.
+    pub improve: ImproveStats,
+    /// Resize counts.
+    pub resize: ResizeStats,
+}
+
+impl<K: Connectivity> Complex<K> {
+    /// The DSC deformation (`shared/docs/dsc-method.md`, section 3): each vertex
+    /// with a destination moves as far as it can without inverting a cell, one
+    /// vertex at a time; the mesh is improved; this repeats until every vertex has
+    /// arrived or `max_rounds` is reached; then the mesh is resized and improved,
+    /// and finally compacted (ids held from before the call are invalid after it).
+    pub fn deform(&mut self, destinations: &Destinations<K>, params: &DscParams) -> DeformReport {
+        let mut report = DeformReport::default();
+        let tol = params.tolerance();
+        let mut star = Vec::new();
+        let mut pending: Vec<VertexId> = (0..destinations.targets.len() as u32)
+            .map(VertexId)
+            .filter(|&v| destinations.get(v).is_some() && self.is_vertex_alive(v))
+            .collect();
+        let requested = pending.len();
+        while !pending.is_empty() && report.rounds < params.max_rounds {
+            report.rounds += 1;
+            pending.retain(|&v| {
+                if !self.is_vertex_alive(v) {
+                    return false;
+                }
+                let dest = destinations
+                    .get(v)
+                    .expect("pending vertices have destinations");
+                match self.move_towards(v, dest, tol, &mut star) {
+                    MoveOutcome::Arrived => {
+                        report.arrived += 1;
+                        false
+                    }
+                    MoveOutcome::Partial(_) | MoveOutcome::Blocked => true,
+                }
+            });
+            add(&mut report.improve, self.improve(params));
+        }
+        report.stopped_short = requested - report.arrived;
+        report.resize = self.resize(params);
+        add(&mut report.improve, self.improve(params));
+        self.compact();
+        report
+    }
+}
+
+fn add(total: &mut ImproveStats, s: ImproveStats) {
+    total.smoothed += s.smoothed;
+    total.flips += s.flips;
+    total.safe_collapses += s.safe_collapses;
+    total.unsafe_collapses += s.unsafe_collapses;
+}

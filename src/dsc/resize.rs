@@ -1,0 +1,109 @@
+//! Resizing after a deform: keep interface edges and cells near the target size.
+
+use super::DscParams;
+use crate::complex::{CellId, Complex, VertexId};
+use crate::dim::Point;
+use crate::ops::CollapseMode;
+use serde::Serialize;
+
+use super::Connectivity;
+
+/// Counts of what one resize did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct ResizeStats {
+    /// Interface edges split for being long.
+    pub interface_splits: usize,
+    /// Interface edges collapsed for being short.
+    pub interface_collapses: usize,
+    /// Large cells split at their longest edge.
+    pub cell_splits: usize,
+    /// Small cells collapsed.
+    pub cell_collapses: usize,
+}
+
+impl<K: Connectivity> Complex<K> {
+    /// Splits long and collapses short interface edges, splits large and
+    /// collapses small cells, then improves the mesh.
+    pub fn resize(&mut self, params: &DscParams) -> ResizeStats {
+        let mut stats = ResizeStats::default();
+        let l = params.edge_length;
+        let straight_cos = params.straight_angle_deg.to_radians().cos();
+        for (u, v) in self.interface_edges() {
+            if self
+                .edge_length_if_alive(u, v)
+                .is_some_and(|len| len > params.max_length * l)
+                && self.split_edge(u, v).is_ok()
+            {
+                stats.interface_splits += 1;
+            }
+        }
+        for (u, v) in self.interface_edges() {
+            if self
+                .edge_length_if_alive(u, v)
+                .is_some_and(|len| len < params.min_length * l)
+                && self
+                    .collapse_edge(u, v, CollapseMode::Safe, params.min_quality, straight_cos)
+                    .is_ok()
+            {
+                stats.interface_collapses += 1;
+            }
+        }
+        let max_measure = params.measure::<K>(params.max_measure);
+        let min_measure = params.measure::<K>(params.min_measure);
+        let end = self.cell_capacity();
+        for c in 0..end {
+            let c = CellId(c as u32);
+            if !self.is_alive(c) {
+                continue;
+            }
+            let m = self.measure(c);
+            if m > max_measure {
+                let (u, v) = self.longest_edge(c);
+                if self.split_edge(u, v).is_ok() {
+                    stats.cell_splits += 1;
+                }
+            } else if m < min_measure {
+                let (u, v) = self.shortest_edge(c);
+                if self
+                    .collapse_edge(u, v, CollapseMode::Safe, params.min_quality, straight_cos)
+                    .is_ok()
+                {
+                    stats.cell_collapses += 1;
+                }
+            }
+        }
+        stats
+    }
+
+    /// Every edge lying in an interface facet, each once.
+    pub fn interface_edges(&self) -> Vec<(VertexId, VertexId)> {
+        let mut edges = Vec::new();
+        for c in self.cell_ids() {
+            let cell = self.cell(c);
+            for i in 0..K::NV {
+                let Some(nb) = self.neighbours(c)[i] else {
+                    continue;
+                };
+                if nb < c || self.label(nb) == self.label(c) {
+                    continue;
+                }
+                for a in 0..K::NV {
+                    for b in a + 1..K::NV {
+                        if a != i && b != i {
+                            let (u, v) = (cell[a], cell[b]);
+                            edges.push(if u < v { (u, v) } else { (v, u) });
+                        }
+                    }
+                }
+            }
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        edges
+    }
+
+    fn edge_length_if_alive(&self, u: VertexId, v: VertexId) -> Option<f64> {
+        (self.is_vertex_alive(u) && self.is_vertex_alive(v))
+            .then(|| (self.position(u) - self.position(v)).length())
+    }
+}

@@ -1,0 +1,240 @@
+//! Edge collapse: merge two vertices, removing the cells around their edge.
+//!
+//! ```text
+//!      a                 a
+//!     / \               /|
+//!    u---v     ==>     u |      (v merged into u; the two cells on uv vanish)
+//!     \ /               \|
+//!      b                 b
+//! ```
+//! A *safe* collapse keeps the interface where it is: an interface vertex may
+//! only move along its interface where that is straight, and two interface
+//! vertices may only merge along an interface edge. An *unsafe* collapse may
+//! merge interface vertices across a thin region: that is how the DSC changes
+//! topology (two regions merge, a neck pinches).
+
+use crate::complex::{CellId, Complex, Label, Rejection, VertexId, VertexKind};
+use crate::dim::{Dim, Point};
+
+/// Whether a collapse must preserve the interface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CollapseMode {
+    /// Keep the interface and its topology.
+    Safe,
+    /// Allow interface vertices to merge across a region (topology change).
+    Unsafe,
+}
+
+/// A candidate outcome: `remove` merges into `keep`, which moves to `at`.
+#[derive(Clone, Copy)]
+struct Candidate<P> {
+    keep: VertexId,
+    remove: VertexId,
+    at: P,
+}
+
+impl<K: Dim> Complex<K> {
+    /// Collapses the edge `uv`, choosing which end survives and where (either end
+    /// or the midpoint) to maximise the worst quality of the new cells, which must
+    /// reach `min_quality`. Returns the surviving vertex.
+    pub fn collapse_edge(
+        &mut self,
+        u: VertexId,
+        v: VertexId,
+        mode: CollapseMode,
+        min_quality: f64,
+        straight_cos: f64,
+    ) -> Result<VertexId, Rejection> {
+        if u == v || !self.is_vertex_alive(u) || !self.is_vertex_alive(v) {
+            return Err(Rejection::Stale);
+        }
+        let mut star_u = Vec::new();
+        let mut star_v = Vec::new();
+        self.star_into(u, &mut star_u);
+        self.star_into(v, &mut star_v);
+        let edge_cells: Vec<CellId> = star_u
+            .iter()
+            .copied()
+            .filter(|&c| self.cell(c).contains(&v))
+            .collect();
+        if edge_cells.is_empty() {
+            return Err(Rejection::Stale);
+        }
+        self.check_link(u, v, &star_u, &star_v, &edge_cells)?;
+        let (cu, cv) = (self.class(u), self.class(v));
+        let interface_edge = self.edge_on_interface(u, v, &edge_cells);
+        if mode == CollapseMode::Safe && cu.on_interface() && cv.on_interface() && !interface_edge {
+            return Err(Rejection::Constrained);
+        }
+        let (pu, pv) = (self.position(u), self.position(v));
+        let free = |w: VertexId| -> bool {
+            match self.class(w).kind {
+                VertexKind::Interior => true,
+                _ if mode == CollapseMode::Unsafe => true,
+                VertexKind::Interface => interface_edge && self.interface_is_flat(w, straight_cos),
+                VertexKind::Junction => false,
+            }
+        };
+        let (free_u, free_v) = (free(u), free(v));
+        let mut best: Option<(f64, Candidate<K::Point>)> = None;
+        for at in [pu, pv, (pu + pv) * 0.5] {
+            let on_faces = self.boundary_mask(&at);
+            if on_faces & cu.boundary != cu.boundary || on_faces & cv.boundary != cv.boundary {
+                continue;
+            }
+            if (at != pu && !free_u) || (at != pv && !free_v) {
+                continue;
+            }
+            for (keep, remove, star_keep, star_remove) in
+                [(u, v, &star_u, &star_v), (v, u, &star_v, &star_u)]
+            {
+                let q = self.collapse_quality(keep, remove, at, star_keep, star_remove);
+                if q > 0.0 && best.as_ref().is_none_or(|(bq, _)| q > *bq) {
+                    best = Some((q, Candidate { keep, remove, at }));
+                }
+            }
+        }
+        let Some((quality, cand)) = best else {
+            return Err(Rejection::NoCandidate);
+        };
+        if quality < min_quality {
+            return Err(Rejection::LowQuality);
+        }
+        self.apply_collapse(cand, if cand.keep == u { &star_v } else { &star_u })?;
+        Ok(cand.keep)
+    }
+
+    /// Worst quality of the cells around `keep` after merging `remove` into it at `at`
+    /// (0 if any would invert).
+    fn collapse_quality(
+        &self,
+        keep: VertexId,
+        remove: VertexId,
+        at: K::Point,
+        star_keep: &[CellId],
+        star_remove: &[CellId],
+    ) -> f64 {
+        let mut worst: f64 = 1.0;
+        for &c in star_keep.iter().chain(star_remove) {
+            let cell = self.cell(c);
+            if cell.contains(&keep) && cell.contains(&remove) {
+                continue;
+            }
+            let mut pts = self.cell_points(c);
+            for (i, &w) in cell.iter().enumerate() {
+                if w == keep || w == remove {
+                    pts[i] = at;
+                }
+            }
+            if K::orient(&pts[..K::NV]) <= 0.0 {
+                return 0.0;
+            }
+            worst = worst.min(K::quality(&pts[..K::NV]));
+        }
+        worst
+    }
+
+    fn apply_collapse(
+        &mut self,
+        cand: Candidate<K::Point>,
+        star_remove: &[CellId],
+    ) -> Result<(), Rejection> {
+        let new: Vec<(K::Cell, Label)> = star_remove
+            .iter()
+            .filter(|&&c| !self.cell(c).contains(&cand.keep))
+            .map(|&c| {
+                let mut cell = K::cell(self.cell(c));
+                for w in cell.as_mut() {
+                    if *w == cand.remove {
+                        *w = cand.keep;
+                    }
+                }
+                (cell, self.label(c))
+            })
+            .collect();
+        let old_pos = self.position(cand.keep);
+        self.set_position(cand.keep, cand.at);
+        let mut created = Vec::new();
+        let result = self.replace_cells(star_remove, &new, &mut created);
+        if result.is_err() {
+            self.set_position(cand.keep, old_pos);
+        } else {
+            // The kept vertex moved: its whole star may change class (boundary mask).
+            let mut star = Vec::new();
+            self.star_into(cand.keep, &mut star);
+            self.reclassify_cells(&star);
+        }
+        result
+    }
+
+    /// Link condition on vertices: every common neighbour of `u` and `v` must be
+    /// a vertex of a cell containing the edge; and two boundary vertices may only
+    /// merge along a boundary facet.
+    fn check_link(
+        &self,
+        u: VertexId,
+        v: VertexId,
+        star_u: &[CellId],
+        star_v: &[CellId],
+        edge_cells: &[CellId],
+    ) -> Result<(), Rejection> {
+        for &cu in star_u {
+            for &w in self.cell(cu) {
+                if w == u || w == v {
+                    continue;
+                }
+                let adjacent_to_v = star_v.iter().any(|&cv| self.cell(cv).contains(&w));
+                let in_edge_link = edge_cells.iter().any(|&ce| self.cell(ce).contains(&w));
+                if adjacent_to_v && !in_edge_link {
+                    return Err(Rejection::NonManifold);
+                }
+            }
+        }
+        if self.class(u).on_boundary() && self.class(v).on_boundary() {
+            let along_boundary = edge_cells.iter().any(|&c| {
+                let cell = self.cell(c);
+                self.neighbours(c)
+                    .iter()
+                    .enumerate()
+                    .any(|(i, nb)| nb.is_none() && cell[i] != u && cell[i] != v)
+            });
+            if !along_boundary {
+                return Err(Rejection::BoundaryPinch);
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether the edge `uv` lies in an interface facet.
+    fn edge_on_interface(&self, u: VertexId, v: VertexId, edge_cells: &[CellId]) -> bool {
+        edge_cells.iter().any(|&c| {
+            let cell = self.cell(c);
+            (0..K::NV).any(|i| cell[i] != u && cell[i] != v && self.is_interface_facet(c, i))
+        })
+    }
+
+    /// Whether the interface facets around `w` are nearly parallel (normals
+    /// oriented from the lower to the higher label agree to `straight_cos`).
+    pub(crate) fn interface_is_flat(&self, w: VertexId, straight_cos: f64) -> bool {
+        let mut star = Vec::new();
+        self.star_into(w, &mut star);
+        let mut normals: Vec<K::Point> = Vec::new();
+        for &c in &star {
+            let cell = self.cell(c);
+            let pts = self.cell_points(c);
+            for i in 0..K::NV {
+                if cell[i] == w || !self.is_interface_facet(c, i) {
+                    continue;
+                }
+                let nb = self.neighbours(c)[i].expect("interface facets are interior");
+                if self.label(c) > self.label(nb) {
+                    continue; // each facet once, seen from its lower-label side
+                }
+                normals.push(K::facet_normal(&pts[..K::NV], i));
+            }
+        }
+        normals
+            .iter()
+            .all(|a| normals.iter().all(|b| a.dot(b) >= straight_cos))
+    }
+}

@@ -1,0 +1,41 @@
+//! Laplacian smoothing of vertices off the interface.
+
+use crate::complex::{CellId, Complex, VertexId};
+use crate::dim::{Dim, Point};
+
+impl<K: Dim> Complex<K> {
+    /// Moves a non-interface vertex towards the mean of its neighbours (sliding
+    /// along the domain boundary if it lies on it). Accepted only if no cell
+    /// inverts and the worst quality of its star does not drop. Returns whether it moved.
+    pub fn smooth_vertex(&mut self, v: VertexId, star: &mut Vec<CellId>) -> bool {
+        if !self.is_vertex_alive(v) || self.class(v).on_interface() {
+            return false;
+        }
+        self.star_into(v, star);
+        let mut sum = K::Point::zero();
+        let mut n = 0usize;
+        for &c in star.iter() {
+            for &w in self.cell(c) {
+                if w != v {
+                    sum += self.position(w);
+                    n += 1;
+                }
+            }
+        }
+        if n == 0 {
+            return false;
+        }
+        let p = self.position(v);
+        let target = self.constrain(v, sum * (1.0 / n as f64));
+        if (target - p).length() <= 1e-12 {
+            return false;
+        }
+        let before = self.min_quality_at(star, v, p);
+        if !self.star_positive_at(star, v, target) || self.min_quality_at(star, v, target) < before
+        {
+            return false;
+        }
+        self.set_position(v, target);
+        true
+    }
+}

@@ -1,0 +1,1 @@
+//! Generic tests run for both dimensions.

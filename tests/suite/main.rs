@@ -1,0 +1,5 @@
+//! All integration tests in one binary (one link, shared helpers).
+
+mod common;
+mod dsc2d;
+mod generic;
