@@ -345,6 +345,20 @@ mod tests {
         }
     }
 
+    /// FNV-1a of the noise-free 8-bit renders, from
+    /// `peers.render(labels(64), levels, 0.0, 1.5, 0)` (SciPy 1.17.1); the
+    /// blur reproduces SciPy's summation order, so even the 76.5 / 178.5
+    /// rounding ties of the 0.3 / 0.7 levels come out the same.
+    #[test]
+    fn noise_free_render_matches_scipy_at_64() {
+        let two = two_phase(64, 0.0, 0).image_u8();
+        assert_eq!(fnv1a(&two), 0xf5b41368d0d5da6f);
+        assert_eq!((two[0], two[20 * 64 + 20]), (77, 77));
+        let four = four_phase(64, 0.0, 0).image_u8();
+        assert_eq!(fnv1a(&four), 0x519feffa3b6d5139);
+        assert_eq!((four[0], four[20 * 64 + 20]), (51, 137));
+    }
+
     #[test]
     fn phantoms_are_deterministic_per_seed() {
         for kind in Phantom2Kind::ALL {
