@@ -393,3 +393,76 @@ fn seed_outside_the_surface_is_rejected() {
         tetgen_sys::validate_plc(&plc).unwrap_or_else(|e| panic!("{seed:?}: {e}"));
     }
 }
+
+/// Surface of the unit cube with every face split into an `n x n` grid of
+/// squares (2 triangles each): many coplanar neighbours, which the
+/// intersection test must accept.
+fn subdivided_cube(n: usize) -> Plc {
+    let mut points: Vec<[f64; 3]> = Vec::new();
+    let mut index = std::collections::HashMap::new();
+    let mut id = |p: [usize; 3], points: &mut Vec<[f64; 3]>| -> u32 {
+        *index.entry(p).or_insert_with(|| {
+            points.push(p.map(|c| c as f64 / n as f64));
+            (points.len() - 1) as u32
+        })
+    };
+    let mut triangles = Vec::new();
+    for axis in 0..3 {
+        for side in [0, n] {
+            for i in 0..n {
+                for j in 0..n {
+                    let corner = |di: usize, dj: usize| {
+                        let mut p = [0; 3];
+                        p[axis] = side;
+                        p[(axis + 1) % 3] = i + di;
+                        p[(axis + 2) % 3] = j + dj;
+                        p
+                    };
+                    let q = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)]
+                        .map(|p| id(p, &mut points));
+                    triangles.push([q[0], q[1], q[2]]);
+                    triangles.push([q[0], q[2], q[3]]);
+                }
+            }
+        }
+    }
+    Plc {
+        points,
+        triangles,
+        regions: Vec::new(),
+    }
+}
+
+#[test]
+fn subdivided_cube_is_valid_and_meshes() {
+    let plc = subdivided_cube(4);
+    assert_eq!(plc.triangles.len(), 6 * 4 * 4 * 2);
+    let mesh = tetrahedralize(
+        &plc,
+        &Switches {
+            quality: Some(1.4),
+            preserve_surface: true,
+            ..Switches::default()
+        },
+    )
+    .unwrap();
+    assert_positive(&mesh);
+    assert!((total_volume(&mesh) - 1.0).abs() < 1e-9);
+
+    // Validation of a large surface stays fast thanks to the grid.
+    let big = subdivided_cube(40); // 19 200 triangles
+    let start = std::time::Instant::now();
+    tetgen_sys::validate_plc(&big).unwrap();
+    assert!(start.elapsed().as_secs_f64() < 10.0);
+
+    // Pushing one face vertex through the opposite face is caught.
+    let mut bad = subdivided_cube(4);
+    let p = bad
+        .points
+        .iter()
+        .position(|p| *p == [0.5, 0.5, 1.0])
+        .unwrap();
+    bad.points[p] = [0.5, 0.5, -0.25];
+    let err = tetrahedralize(&bad, &Switches::default()).unwrap_err();
+    assert!(matches!(err, TetgenError::SelfIntersection { .. }), "{err}");
+}
