@@ -1,1 +1,3 @@
-//! TODO
+//! File input and output.
+
+pub mod surface;
