@@ -12,6 +12,7 @@ mod ids;
 mod measure;
 mod validate;
 
+pub use build::BuildError;
 pub use cavity::Rejection;
 pub use class::{VertexClass, VertexKind};
 pub use ids::{CellId, Label, VertexId};
