@@ -23,6 +23,9 @@ fn main() {
     if let Ok(b) = std::env::var("LW") {
         p.length_weight = b.parse().unwrap();
     }
+    if let Ok(b) = std::env::var("ELA") {
+        p.elasticity = b.parse().unwrap();
+    }
     if let Ok(b) = std::env::var("STEP") {
         p.step_fraction = b.parse().unwrap();
     }
@@ -37,6 +40,15 @@ fn main() {
     });
     let lab = s.label_image();
     let k = ph.phases;
+    if let Ok(out) = std::env::var("OUT") {
+        let scale = (255 / (k - 1)) as u8;
+        let mut buf: Vec<u8> = lab.iter().map(|&v| v * scale).collect();
+        buf.extend(ph.image_u8());
+        image::GrayImage::from_raw(ph.width as u32, 2 * ph.height as u32, buf)
+            .unwrap()
+            .save(out)
+            .unwrap();
+    }
     let mut dice = 0.0;
     for ph_k in 0..k as u8 {
         let tp = lab

@@ -164,8 +164,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         Ok(s)
     }
 
-    /// ν = `length_weight` × (smallest gap between known means)², or × the
-    /// squared dynamic range over N if fewer than two means are known.
+    /// ν = `length_weight` × (smallest gap between known means) (intensities
+    /// in `[0, 1]`), or × the dynamic range over N if fewer than two means are known.
     fn length_weight(&self) -> f64 {
         let mut m: Vec<f64> = self.phases.mean.iter().flatten().copied().collect();
         m.sort_by(f64::total_cmp);
@@ -179,7 +179,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         } else {
             (self.range.1 - self.range.0) / self.params.phases as f64
         };
-        self.params.length_weight * gap * gap
+        self.params.length_weight * gap
     }
 
     /// The complex in its current state.
@@ -239,7 +239,16 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 &self.cells,
                 &self.phases,
                 self.nu,
+                self.params.flip_guard,
             );
+            if self.params.flip_guard {
+                flips += self.flipper.component_flips(
+                    &mut self.complex,
+                    &self.cells,
+                    &self.phases,
+                    self.nu,
+                );
+            }
             if flips > 0 {
                 self.phases.update(&self.complex, &self.cells);
             }
