@@ -8,6 +8,7 @@ pub mod atomic;
 pub mod error;
 pub mod image2;
 pub mod volume;
+pub mod vtk;
 
 pub use atomic::{write_atomic, write_bytes_atomic};
 pub use error::IoError;
