@@ -7,6 +7,7 @@
 pub mod atomic;
 pub mod error;
 pub mod image2;
+pub mod render;
 pub mod volume;
 pub mod vtk;
 
