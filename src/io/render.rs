@@ -259,8 +259,10 @@ impl<'a> Overlay<'a> {
     }
 
     /// Saves the figure as SVG, atomically: the image embedded as a
-    /// base64 PNG at its native resolution (shown pixelated), the mesh and
-    /// interfaces as vector paths in image pixel units.
+    /// base64 PNG at its native resolution (asked to be shown pixelated;
+    /// browsers honour this, some converters smooth it), the mesh and
+    /// interfaces as vector paths in image pixel units (`viewBox` is
+    /// `0 0 W H`, the displayed size that of [`Overlay::output_size`]).
     pub fn to_svg(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         self.check().map_err(|e| IoError::invalid(path, e))?;
@@ -279,11 +281,13 @@ impl<'a> Overlay<'a> {
         let _ = write!(
             svg,
             "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n\
-             <svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" \
+             <svg xmlns=\"http://www.w3.org/2000/svg\" \
+             xmlns:xlink=\"http://www.w3.org/1999/xlink\" width=\"{w}\" height=\"{h}\" \
              viewBox=\"0 0 {iw} {ih}\">\n\
              <image x=\"0\" y=\"0\" width=\"{iw}\" height=\"{ih}\" \
-             preserveAspectRatio=\"none\" style=\"image-rendering:pixelated\" \
-             href=\"data:image/png;base64,{}\"/>\n",
+             preserveAspectRatio=\"none\" image-rendering=\"optimizeSpeed\" \
+             style=\"image-rendering:pixelated\" \
+             xlink:href=\"data:image/png;base64,{}\"/>\n",
             base64(&png)
         );
         for layer in self.layers() {
