@@ -19,7 +19,10 @@ use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use image::{Delay, Frame, RgbaImage};
+/// The RGBA frame type produced by [`Overlay::to_rgba_image`] and consumed
+/// by [`save_gif`] (re-exported from the `image` crate for convenience).
+pub use image::RgbaImage;
+use image::{Delay, Frame};
 use tiny_skia::{LineCap, LineJoin, Paint, PathBuilder, Pixmap, Stroke, Transform};
 
 use super::atomic::{write_atomic, write_bytes_atomic};
