@@ -8,6 +8,7 @@
 mod build;
 mod cavity;
 mod class;
+mod export;
 mod ids;
 mod measure;
 mod validate;
@@ -15,6 +16,7 @@ mod validate;
 pub use build::BuildError;
 pub use cavity::Rejection;
 pub use class::{VertexClass, VertexKind};
+pub use export::MeshArrays;
 pub use ids::{CellId, Label, VertexId};
 pub use validate::Finding;
 

@@ -3,3 +3,4 @@
 mod common;
 mod dsc2d;
 mod generic;
+mod prop2d;
