@@ -282,7 +282,7 @@ impl Mesh {
         Mesh {
             points: a.points_2d(),
             triangles: a.triangles(),
-            labels: a.labels.iter().map(|&l| u32::from(l)).collect(),
+            labels: a.labels.clone(),
         }
     }
 }
