@@ -2,5 +2,6 @@
 
 mod common;
 mod dsc2d;
+mod figures;
 mod generic;
 mod prop2d;
