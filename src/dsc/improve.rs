@@ -110,6 +110,7 @@ impl<K: Connectivity> Complex<K> {
         stats.smoothed += self.smooth_vertices(&vertices);
         stats.flips += K::improve_connectivity_near(self, seeds, params);
         self.region_cells(seeds, &mut cells, &mut marks);
+        self.grow_region(&mut cells, &mut marks);
         let (safe, unsafe_) = self.remove_degenerate_in(&cells, params);
         stats.safe_collapses += safe;
         stats.unsafe_collapses += unsafe_;
@@ -134,6 +135,26 @@ impl<K: Connectivity> Complex<K> {
                 if !marks[c.index()] {
                     marks[c.index()] = true;
                     out.push(c);
+                }
+            }
+        }
+    }
+
+    /// The region grown by one ring: every cell sharing a vertex with `cells`.
+    /// Squeezed cells between two meeting fronts need not touch a vertex that
+    /// moved in this round, but they always touch one that shares a cell with it.
+    fn grow_region(&self, cells: &mut Vec<CellId>, marks: &mut Vec<bool>) {
+        marks.resize(self.cell_capacity(), false);
+        let mut vertices = Vec::new();
+        let mut vmarks = Vec::new();
+        self.region_vertices(cells, &mut vertices, &mut vmarks);
+        let mut star = Vec::new();
+        for &v in &vertices {
+            self.star_into(v, &mut star);
+            for &c in &star {
+                if !marks[c.index()] {
+                    marks[c.index()] = true;
+                    cells.push(c);
                 }
             }
         }
