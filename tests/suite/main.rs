@@ -1,6 +1,7 @@
 //! All integration tests in one binary (one link, shared helpers).
 
 mod common;
+mod determinism;
 mod dsc2d;
 mod figures;
 mod generic;
