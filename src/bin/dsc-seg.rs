@@ -72,6 +72,12 @@ struct SegmentArgs {
     /// Rigidity weight β of eq. (2).
     #[arg(long, allow_hyphen_values = true)]
     rigidity: Option<f64>,
+    /// Elasticity weight α of eq. (2) (off by default, as in the paper).
+    #[arg(long, allow_hyphen_values = true)]
+    elasticity: Option<f64>,
+    /// Largest displacement per iteration as a fraction of L.
+    #[arg(long, allow_hyphen_values = true)]
+    step_fraction: Option<f64>,
     /// Built-in phantom to segment when no IMAGE is given.
     #[arg(long, default_value = "four_phase")]
     phantom: String,
@@ -158,6 +164,12 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
     params.label_flips = !a.no_label_flips;
     if let Some(b) = a.rigidity {
         params.rigidity = b;
+    }
+    if let Some(c) = a.step_fraction {
+        params.step_fraction = c;
+    }
+    if let Some(e) = a.elasticity {
+        params.elasticity = e;
     }
     params.init = match a.init {
         InitKind::Range => Init::Range,

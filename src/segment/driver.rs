@@ -14,6 +14,11 @@ use crate::dsc::{Destinations, DscParams};
 use serde::Serialize;
 use std::time::Instant;
 
+/// Largest stable coefficient of the explicit bending step (see [`Segmentation::step`]).
+pub const MAX_BENDING_STEP: f64 = 0.2;
+/// Largest stable coefficient of the explicit stretching (umbrella) step.
+pub const MAX_STRETCHING_STEP: f64 = 0.5;
+
 /// What one iteration saw and did.
 #[derive(Clone, Debug, Serialize)]
 pub struct IterationRecord {
@@ -259,18 +264,18 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let l = self.dsc.edge_length;
         let settings = ForceSettings {
             model: self.params.force,
-            rigidity: self.params.rigidity,
-            elasticity: self.params.elasticity,
-            edge_length: l,
             spacing: self.params.sample_spacing,
             equal_means: 1e-6 * (self.range.1 - self.range.0),
         };
         self.forces
             .compute(&self.complex, &self.image, &self.phases, &settings);
         let length = self.forces.interface_measure;
-        // Step: the largest displacement is step_fraction·L once a force reaches
-        // the reference magnitude (1 for eq. 6: a pixel exactly at a mean);
-        // weaker fields move proportionally less, so the evolution can settle.
+        // Step: the largest external displacement is step_fraction·L once a
+        // force reaches the reference magnitude (1 for eq. 6: a pixel exactly
+        // at a mean); weaker fields move proportionally less, so the evolution
+        // can settle. The internal terms are explicit smoothing steps whose
+        // coefficient (dt·β/L) is capped at a stable value: for the bending
+        // term the highest-frequency mode grows by 1 − 4k per step, so k ≤ 0.2.
         let reference = match self.params.force {
             ForceModel::Normalised => 1.0,
             ForceModel::ChanVese => {
@@ -283,20 +288,28 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         };
         let fmax = self
             .forces
-            .force
+            .external
             .iter()
             .map(|f| f.length())
             .fold(0.0, f64::max);
         let scale = self.params.step_fraction * l / fmax.max(reference);
+        let k_bend = (scale * self.params.rigidity / l).min(MAX_BENDING_STEP);
+        let k_stretch = (scale * self.params.elasticity / l).min(MAX_STRETCHING_STEP);
         self.dest.clear();
         let mut max_disp: f64 = 0.0;
-        for v in self.complex.vertex_ids().collect::<Vec<VertexId>>() {
-            let f = self.forces.force[v.index()];
-            if f == K::Point::zero() {
+        for i in 0..self.complex.vertex_capacity() {
+            let v = VertexId(i as u32);
+            if !self.complex.is_vertex_alive(v) {
+                continue;
+            }
+            let d = self.forces.external[i] * scale
+                + self.forces.bending[i] * k_bend
+                + self.forces.stretching[i] * k_stretch;
+            if d == K::Point::zero() {
                 continue;
             }
             let p = self.complex.position(v);
-            let target = self.complex.constrain(v, p + f * scale);
+            let target = self.complex.constrain(v, p + d);
             let d = (target - p).length();
             if d > 0.0 {
                 max_disp = max_disp.max(d);
