@@ -9,20 +9,48 @@ fn main() {
     p.label_flips = false;
     p.step_fraction = 0.25;
     p.max_iterations = 800;
-    p.init = Init::Disks(vec![InitDisk { x: seed.x, y: seed.y, r: seed.r, phase: 1 }]);
+    p.init = Init::Disks(vec![InitDisk {
+        x: seed.x,
+        y: seed.y,
+        r: seed.r,
+        phase: 1,
+    }]);
     let img = ImageView::new_2d(n, n, &ph.image).unwrap();
     let mut s = Segmentation::<D2>::new(img, p).unwrap();
     let r = s.run(|_| {});
-    println!("components {} {} iters {}", s.complex().components(0), s.complex().components(1), r.iterations);
+    println!(
+        "components {} {} iters {}",
+        s.complex().components(0),
+        s.complex().components(1),
+        r.iterations
+    );
     let c = s.complex();
     let dp = s.dsc_params();
     for t in c.cell_ids() {
         let q = c.cell_points(t);
         let g = (q[0] + q[1] + q[2]) / 3.0;
         if c.label(t) == 0 && g.x > 45.5 && g.x < 83.5 && g.y < 33.0 && g.y > 14.0 {
-            let kinds: Vec<_> = c.cell(t).iter().map(|&v| format!("{:?}", c.class(v).kind)).collect();
-            let nbl: Vec<_> = c.neighbours(t).iter().map(|n| n.map(|n| c.label(n))).collect();
-            println!("{:?} L{} nb {:?} q {:.4} area {:.4} deg {} {:?} {:?}", t, c.label(t), nbl, c.quality(t), c.measure(t), c.is_degenerate(t, dp), g, kinds);
+            let kinds: Vec<_> = c
+                .cell(t)
+                .iter()
+                .map(|&v| format!("{:?}", c.class(v).kind))
+                .collect();
+            let nbl: Vec<_> = c
+                .neighbours(t)
+                .iter()
+                .map(|n| n.map(|n| c.label(n)))
+                .collect();
+            println!(
+                "{:?} L{} nb {:?} q {:.4} area {:.4} deg {} {:?} {:?}",
+                t,
+                c.label(t),
+                nbl,
+                c.quality(t),
+                c.measure(t),
+                c.is_degenerate(t, dp),
+                g,
+                kinds
+            );
         }
     }
 }

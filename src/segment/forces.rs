@@ -195,7 +195,8 @@ impl<K: Raster> ForceField<K> {
         }
     }
 
-    /// Computes [`ForceField::force`] for every vertex of `complex`.
+    /// Computes the external, bending and stretching terms of every vertex of `complex`.
+    #[allow(clippy::needless_range_loop)] // corners and their points are indexed in pairs
     pub fn compute(
         &mut self,
         complex: &Complex<K>,
@@ -427,10 +428,10 @@ fn junction_weights<P: Point>(acc: &mut Acc<P>, phases: &PhaseStats, intensity: 
             continue;
         };
         if m <= intensity {
-            if below.map_or(true, |(_, bm)| m > bm) {
+            if below.is_none_or(|(_, bm)| m > bm) {
                 below = Some((sl, m));
             }
-        } else if above.map_or(true, |(_, am)| m < am) {
+        } else if above.is_none_or(|(_, am)| m < am) {
             above = Some((sl, m));
         }
     }

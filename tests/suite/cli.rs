@@ -27,16 +27,25 @@ fn write_image(dir: &Path, w: u32, h: u32) -> PathBuf {
 
 fn write_labels(dir: &Path, w: u32, h: u32, value: u8) -> PathBuf {
     let p = dir.join(format!("labels_{w}x{h}_{value}.png"));
-    image::GrayImage::from_fn(w, h, |x, _| image::Luma([if x < w / 2 { 0 } else { value }]))
-        .save(&p)
-        .unwrap();
+    image::GrayImage::from_fn(w, h, |x, _| {
+        image::Luma([if x < w / 2 { 0 } else { value }])
+    })
+    .save(&p)
+    .unwrap();
     p
 }
 
 /// Runs `dsc-seg segment` with `args`, expects failure with a one-line
 /// `error: ...` mentioning `needle`, and an output directory without outputs.
 fn fails(args: &[&str], out: &Path, needle: &str) {
-    let o: Output = bin().arg("segment").args(args).arg("--out").arg(out).arg("--quiet").output().unwrap();
+    let o: Output = bin()
+        .arg("segment")
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "succeeded: {args:?}");
     assert!(err.starts_with("error: "), "stderr: {err}");
@@ -47,7 +56,13 @@ fn fails(args: &[&str], out: &Path, needle: &str) {
     );
     assert!(!err.contains("panicked"));
     if out.is_dir() {
-        for f in ["labels.png", "overlay.png", "overlay.svg", "mesh.vtu", "report.json"] {
+        for f in [
+            "labels.png",
+            "overlay.png",
+            "overlay.svg",
+            "mesh.vtu",
+            "report.json",
+        ] {
             assert!(!out.join(f).exists(), "{f} written despite the error");
         }
         let leftovers: Vec<_> = std::fs::read_dir(out).unwrap().collect();
@@ -69,8 +84,18 @@ fn segment_writes_every_output() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(o.stderr.is_empty(), "--quiet printed {:?}", String::from_utf8_lossy(&o.stderr));
-    for f in ["labels.png", "overlay.png", "overlay.svg", "mesh.vtu", "report.json"] {
+    assert!(
+        o.stderr.is_empty(),
+        "--quiet printed {:?}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for f in [
+        "labels.png",
+        "overlay.png",
+        "overlay.svg",
+        "mesh.vtu",
+        "report.json",
+    ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
     let labels = image::open(out.join("labels.png")).unwrap();
@@ -81,7 +106,17 @@ fn segment_writes_every_output() {
     assert_eq!(l8.get_pixel(1, 1)[0], 0);
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
-    for key in ["params", "iterations", "converged", "final_means", "energy", "flips", "times", "vertices", "cells"] {
+    for key in [
+        "params",
+        "iterations",
+        "converged",
+        "final_means",
+        "energy",
+        "flips",
+        "times",
+        "vertices",
+        "cells",
+    ] {
         assert!(report.get(key).is_some(), "report lacks {key}");
     }
     assert!(report["times"]["segment"].as_f64().unwrap() > 0.0);
@@ -94,7 +129,15 @@ fn segment_without_image_runs_a_phantom() {
     let d = tmp();
     let out = d.path().join("p");
     let o = bin()
-        .args(["segment", "--phantom", "two_phase", "--phantom-size", "96", "--quiet", "--out"])
+        .args([
+            "segment",
+            "--phantom",
+            "two_phase",
+            "--phantom-size",
+            "96",
+            "--quiet",
+            "--out",
+        ])
         .arg(&out)
         .output()
         .unwrap();
@@ -109,15 +152,26 @@ fn segment_without_image_runs_a_phantom() {
 fn phantom_subcommand_writes_image_and_truth() {
     let d = tmp();
     let o = bin()
-        .args(["phantom", "fig6", "--size", "32", "--noise", "0.1", "--seed", "3", "--out"])
+        .args([
+            "phantom", "fig6", "--size", "32", "--noise", "0.1", "--seed", "3", "--out",
+        ])
         .arg(d.path())
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for f in ["fig6.png", "fig6_gt.png", "fig6_labels.png", "fig6_init.png"] {
+    for f in [
+        "fig6.png",
+        "fig6_gt.png",
+        "fig6_labels.png",
+        "fig6_init.png",
+    ] {
         assert!(d.path().join(f).is_file(), "{f}");
     }
-    let o = bin().args(["phantom", "nope", "--out"]).arg(d.path()).output().unwrap();
+    let o = bin()
+        .args(["phantom", "nope", "--out"])
+        .arg(d.path())
+        .output()
+        .unwrap();
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).starts_with("error: unknown phantom"));
 }
@@ -133,7 +187,11 @@ fn not_an_image() {
     let d = tmp();
     let p = d.path().join("text.png");
     std::fs::write(&p, "hello, not a picture").unwrap();
-    fails(&[p.to_str().unwrap()], &d.path().join("o"), "not a readable image");
+    fails(
+        &[p.to_str().unwrap()],
+        &d.path().join("o"),
+        "not a readable image",
+    );
 }
 
 #[test]
@@ -188,13 +246,25 @@ fn bad_init_labels() {
     let out = d.path().join("o");
     let small = write_labels(d.path(), 16, 32, 1);
     fails(
-        &[p, "--init", "labels", "--init-labels", small.to_str().unwrap()],
+        &[
+            p,
+            "--init",
+            "labels",
+            "--init-labels",
+            small.to_str().unwrap(),
+        ],
         &out,
         "32",
     );
     let many = write_labels(d.path(), 32, 32, 2);
     fails(
-        &[p, "--init", "labels", "--init-labels", many.to_str().unwrap()],
+        &[
+            p,
+            "--init",
+            "labels",
+            "--init-labels",
+            many.to_str().unwrap(),
+        ],
         &out,
         "below the number of phases",
     );
@@ -204,7 +274,15 @@ fn bad_init_labels() {
     // a good label image works
     let ok = write_labels(d.path(), 32, 32, 1);
     let o = bin()
-        .args(["segment", p, "--init", "labels", "--no-label-flips", "--quiet", "--init-labels"])
+        .args([
+            "segment",
+            p,
+            "--init",
+            "labels",
+            "--no-label-flips",
+            "--quiet",
+            "--init-labels",
+        ])
         .arg(&ok)
         .arg("--out")
         .arg(d.path().join("good"))
@@ -220,5 +298,9 @@ fn unwritable_out() {
     let file = d.path().join("a_file");
     std::fs::write(&file, "x").unwrap();
     fails(&[p.to_str().unwrap()], &file, "output directory");
-    fails(&[p.to_str().unwrap()], &file.join("sub"), "output directory");
+    fails(
+        &[p.to_str().unwrap()],
+        &file.join("sub"),
+        "output directory",
+    );
 }
