@@ -78,6 +78,9 @@ struct SegmentArgs {
     /// Largest displacement per iteration as a fraction of L.
     #[arg(long, allow_hyphen_values = true)]
     step_fraction: Option<f64>,
+    /// Weight of the length term of the Mumford–Shah energy, as a multiple of the smallest gap between phase means.
+    #[arg(long, allow_hyphen_values = true)]
+    length_weight: Option<f64>,
     /// Built-in phantom to segment when no IMAGE is given.
     #[arg(long, default_value = "four_phase")]
     phantom: String,
@@ -167,6 +170,9 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
     }
     if let Some(c) = a.step_fraction {
         params.step_fraction = c;
+    }
+    if let Some(w) = a.length_weight {
+        params.length_weight = w;
     }
     if let Some(e) = a.elasticity {
         params.elasticity = e;
