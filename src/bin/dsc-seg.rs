@@ -47,7 +47,7 @@ struct SegmentArgs {
     /// Number of phases N, 2..=64 [default: 2, or the phantom's].
     #[arg(long, allow_hyphen_values = true)]
     phases: Option<i64>,
-    /// Average edge length L of the mesh in pixels [default: min(W,H)/64 clamped to 3..8].
+    /// Average edge length L of the mesh in pixels [default: min(W,H)/64·sqrt(N-1) clamped to 3..10].
     #[arg(long, allow_hyphen_values = true)]
     edge_length: Option<f64>,
     /// Iteration cap.

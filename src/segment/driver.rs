@@ -350,7 +350,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         // Under noise a fixed step never lets every vertex settle: once the
         // energy has not reached a new low for `STALL_ITERATIONS`, halve the
         // step (down to 1/16 of the parameter).
-        if rec.energy < self.best_energy - 1e-4 * rec.energy.abs() {
+        if rec.energy < self.best_energy - 3e-4 * rec.energy.abs() {
             self.best_energy = rec.energy;
             self.stalled = 0;
         } else {

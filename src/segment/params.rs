@@ -235,19 +235,28 @@ impl SegmentParams {
     /// The edge length to use for a `width × height` image.
     pub fn resolved_edge_length(&self, width: usize, height: usize) -> f64 {
         self.edge_length
-            .unwrap_or_else(|| default_edge_length(width, height))
+            .unwrap_or_else(|| default_edge_length(width, height, self.phases))
     }
 }
 
-/// The default average edge length: `min(W, H) / 64`, clamped to `[3, 8]`
-/// pixels and to a quarter of the smaller side.
+/// The default average edge length for `phases` phases: `min(W, H) / 64 ·
+/// √(N − 1)`, clamped to `[3, 10]` pixels and to a quarter of the smaller side.
 ///
 /// Accuracy is limited by how well straight edges of length ≥ L/2 follow
-/// curved boundaries; speed by the number of cells (∝ 1/L²). About 64 edges
-/// across the image keeps a 256² image at L = 4 (≈ 9k cells) and a 512² image
-/// at L = 8, and never goes below 3 px, where cells hold too few pixels for
-/// their means to be reliable under noise.
-pub fn default_edge_length(width: usize, height: usize) -> f64 {
+/// curved boundaries and thin structures (a 5-pixel bar needs L ≤ 4), speed by
+/// the number of cells (∝ 1/L²). About 64 edges across the image gives a 256²
+/// two-phase image L = 4 (≈ 9k cells) and a 512² one L = 8. With N phases
+/// the gaps between the means shrink like 1/(N − 1), so the normalised
+/// force of eq. (6) is (N − 1) times noisier per pixel; averaging it along
+/// longer edges compensates part of that: √(N − 1) longer edges (L ≈ 6.9 for
+/// four phases at 256², 10 at 512²) measured best on the four-phase phantoms
+/// (256², σ = 0.2: Dice 0.966 at L = 4, 0.980 at L = 6). Never below 3 px,
+/// where cells hold too few pixels for their means to be reliable under noise.
+pub fn default_edge_length(width: usize, height: usize, phases: usize) -> f64 {
     let m = width.min(height) as f64;
-    (m / 64.0).clamp(3.0, 8.0).min(m / 4.0).max(1.0)
+    let n = phases.max(2) as f64;
+    (m / 64.0 * (n - 1.0).sqrt())
+        .clamp(3.0, 10.0)
+        .min(m / 4.0)
+        .max(1.0)
 }
