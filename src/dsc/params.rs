@@ -1,6 +1,7 @@
 //! The DSC's thresholds, all derived from the one user parameter: the average edge length.
 
-use crate::dim::Dim;
+use crate::dim::{Dim, D2};
+
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -24,9 +25,9 @@ pub struct ParamError {
 pub struct DscParams {
     /// Average edge length `L`, the one user parameter (pixels/voxels).
     pub edge_length: f64,
-    /// Cells below this quality are degenerate and removed (2D: 2° of 60°; 3D: 0.02).
+    /// Cells below this quality are degenerate and removed (2D: a 2° smallest angle; 3D: 0.02).
     pub degenerate_quality: f64,
-    /// A collapse is safe only if the cells it creates reach this quality (2D: 10° of 60°; 3D: 0.3).
+    /// A collapse is safe only if the cells it creates reach this quality (2D: a 10° smallest angle; 3D: 0.3).
     pub min_quality: f64,
     /// Interface edges longer than this times `L` are split.
     pub max_length: f64,
@@ -53,7 +54,10 @@ impl DscParams {
     /// The defaults for dimension `K` at average edge length `edge_length`.
     pub fn new<K: Dim>(edge_length: f64) -> Self {
         let (degenerate_quality, min_quality) = if K::N == 2 {
-            (2.0 / 60.0, 10.0 / 60.0)
+            (
+                D2::quality_of_min_angle(2.0),
+                D2::quality_of_min_angle(10.0),
+            )
         } else {
             (0.02, 0.3)
         };
@@ -166,7 +170,7 @@ impl DscParams {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dim::{D2, D3};
+    use crate::dim::D3;
 
     #[test]
     fn defaults_are_valid_in_both_dimensions() {
