@@ -27,5 +27,5 @@ pub enum Error {
     Usage(String),
 }
 
-/// Shorthand for results with [`Error`].
+/// Shorthand for results with [`enum@Error`].
 pub type Result<T> = std::result::Result<T, Error>;

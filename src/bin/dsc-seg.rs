@@ -47,7 +47,7 @@ struct SegmentArgs {
     /// Number of phases N, 2..=64 [default: 2, or the phantom's].
     #[arg(long, allow_hyphen_values = true)]
     phases: Option<i64>,
-    /// Average edge length L of the mesh in pixels [default: min(W,H)/64 clamped to 3..8].
+    /// Average edge length L of the mesh in pixels [default: min(W,H)/64·sqrt(N-1) clamped to 3..10].
     #[arg(long, allow_hyphen_values = true)]
     edge_length: Option<f64>,
     /// Iteration cap.
@@ -72,6 +72,15 @@ struct SegmentArgs {
     /// Rigidity weight β of eq. (2).
     #[arg(long, allow_hyphen_values = true)]
     rigidity: Option<f64>,
+    /// Elasticity weight α of eq. (2) (off by default, as in the paper).
+    #[arg(long, allow_hyphen_values = true)]
+    elasticity: Option<f64>,
+    /// Largest displacement per iteration as a fraction of L.
+    #[arg(long, allow_hyphen_values = true)]
+    step_fraction: Option<f64>,
+    /// Weight of the length term of the Mumford–Shah energy, as a multiple of the smallest gap between phase means.
+    #[arg(long, allow_hyphen_values = true)]
+    length_weight: Option<f64>,
     /// Built-in phantom to segment when no IMAGE is given.
     #[arg(long, default_value = "four_phase")]
     phantom: String,
@@ -158,6 +167,15 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
     params.label_flips = !a.no_label_flips;
     if let Some(b) = a.rigidity {
         params.rigidity = b;
+    }
+    if let Some(c) = a.step_fraction {
+        params.step_fraction = c;
+    }
+    if let Some(w) = a.length_weight {
+        params.length_weight = w;
+    }
+    if let Some(e) = a.elasticity {
+        params.elasticity = e;
     }
     params.init = match a.init {
         InitKind::Range => Init::Range,

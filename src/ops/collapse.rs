@@ -88,7 +88,8 @@ impl<K: Dim> Complex<K> {
             for (keep, remove, star_keep, star_remove) in
                 [(u, v, &star_u, &star_v), (v, u, &star_v, &star_u)]
             {
-                let q = self.collapse_quality(keep, remove, at, star_keep, star_remove);
+                let q =
+                    self.collapse_quality(keep, remove, at, star_keep, star_remove, min_quality);
                 if q >= min_quality && q > 0.0 {
                     candidates.push((q, Candidate { keep, remove, at }));
                 }
@@ -109,7 +110,10 @@ impl<K: Dim> Complex<K> {
     }
 
     /// Worst quality of the cells around `keep` after merging `remove` into it at `at`
-    /// (0 if any would invert).
+    /// (0 if any would invert). Cells that are already below `min_quality` before
+    /// the collapse are not counted (they may stay degenerate, not invert): otherwise
+    /// a chain of flat cells, e.g. a squeezed sliver between two merging fronts,
+    /// blocks every collapse that would remove it.
     fn collapse_quality(
         &self,
         keep: VertexId,
@@ -117,6 +121,7 @@ impl<K: Dim> Complex<K> {
         at: K::Point,
         star_keep: &[CellId],
         star_remove: &[CellId],
+        min_quality: f64,
     ) -> f64 {
         let mut worst: f64 = 1.0;
         for &c in star_keep.iter().chain(star_remove) {
@@ -125,6 +130,7 @@ impl<K: Dim> Complex<K> {
                 continue;
             }
             let mut pts = self.cell_points(c);
+            let already_degenerate = K::quality(&pts[..K::NV]) < min_quality;
             for (i, &w) in cell.iter().enumerate() {
                 if w == keep || w == remove {
                     pts[i] = at;
@@ -133,7 +139,9 @@ impl<K: Dim> Complex<K> {
             if K::orient(&pts[..K::NV]) <= 0.0 {
                 return 0.0;
             }
-            worst = worst.min(K::quality(&pts[..K::NV]));
+            if !already_degenerate {
+                worst = worst.min(K::quality(&pts[..K::NV]));
+            }
         }
         worst
     }

@@ -14,6 +14,14 @@ use crate::dsc::{Destinations, DscParams};
 use serde::Serialize;
 use std::time::Instant;
 
+/// Largest stable coefficient of the explicit bending step (see [`Segmentation::step`]).
+pub const MAX_BENDING_STEP: f64 = 0.2;
+/// Largest stable coefficient of the explicit stretching (umbrella) step.
+pub const MAX_STRETCHING_STEP: f64 = 0.5;
+
+/// Iterations without a new lowest energy after which the step is halved.
+pub const STALL_ITERATIONS: usize = 10;
+
 /// What one iteration saw and did.
 #[derive(Clone, Debug, Serialize)]
 pub struct IterationRecord {
@@ -105,6 +113,10 @@ pub struct Segmentation<'a, K: Raster> {
     times: StageTimes,
     history: Vec<IterationRecord>,
     quiet_iterations: usize,
+    /// Current step fraction (the parameter, halved when the energy stalls).
+    step: f64,
+    best_energy: f64,
+    stalled: usize,
 }
 
 impl<'a, K: Raster> Segmentation<'a, K> {
@@ -158,7 +170,11 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             times: StageTimes::default(),
             history: Vec::new(),
             quiet_iterations: 0,
+            step: 0.0,
+            best_energy: f64::INFINITY,
+            stalled: 0,
         };
+        s.step = s.params.step_fraction;
         s.nu = s.length_weight();
         s.times.setup = t0.elapsed().as_secs_f64();
         Ok(s)
@@ -259,18 +275,19 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let l = self.dsc.edge_length;
         let settings = ForceSettings {
             model: self.params.force,
-            rigidity: self.params.rigidity,
-            elasticity: self.params.elasticity,
-            edge_length: l,
             spacing: self.params.sample_spacing,
             equal_means: 1e-6 * (self.range.1 - self.range.0),
         };
         self.forces
             .compute(&self.complex, &self.image, &self.phases, &settings);
         let length = self.forces.interface_measure;
-        // Step: the largest displacement is step_fraction·L once a force reaches
-        // the reference magnitude (1 for eq. 6: a pixel exactly at a mean);
-        // weaker fields move proportionally less, so the evolution can settle.
+        // Step: the largest external displacement is `step`·L once a force
+        // reaches the reference magnitude (1 for eq. 6: a pixel exactly at a
+        // mean); weaker fields move proportionally less, so the evolution can
+        // settle. The internal terms are explicit smoothing steps whose
+        // coefficient (dt·β/L) is capped at a stable value: for the bending
+        // term the highest-frequency mode changes by a factor 1 − 4k per
+        // step, so k ≤ 0.2 (and k ≤ 0.5 for the umbrella of the elasticity).
         let reference = match self.params.force {
             ForceModel::Normalised => 1.0,
             ForceModel::ChanVese => {
@@ -283,20 +300,28 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         };
         let fmax = self
             .forces
-            .force
+            .external
             .iter()
             .map(|f| f.length())
             .fold(0.0, f64::max);
-        let scale = self.params.step_fraction * l / fmax.max(reference);
+        let scale = self.step * l / fmax.max(reference);
+        let k_bend = (scale * self.params.rigidity / l).min(MAX_BENDING_STEP);
+        let k_stretch = (scale * self.params.elasticity / l).min(MAX_STRETCHING_STEP);
         self.dest.clear();
         let mut max_disp: f64 = 0.0;
-        for v in self.complex.vertex_ids().collect::<Vec<VertexId>>() {
-            let f = self.forces.force[v.index()];
-            if f == K::Point::zero() {
+        for i in 0..self.complex.vertex_capacity() {
+            let v = VertexId(i as u32);
+            if !self.complex.is_vertex_alive(v) {
+                continue;
+            }
+            let d = self.forces.external[i] * scale
+                + self.forces.bending[i] * k_bend
+                + self.forces.stretching[i] * k_stretch;
+            if d == K::Point::zero() {
                 continue;
             }
             let p = self.complex.position(v);
-            let target = self.complex.constrain(v, p + f * scale);
+            let target = self.complex.constrain(v, p + d);
             let d = (target - p).length();
             if d > 0.0 {
                 max_disp = max_disp.max(d);
@@ -322,6 +347,19 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             means: self.phases.mean.clone(),
             junctions: self.forces.junctions,
         };
+        // Under noise a fixed step never lets every vertex settle: once the
+        // energy has not reached a new low for `STALL_ITERATIONS`, halve the
+        // step (down to 1/16 of the parameter).
+        if rec.energy < self.best_energy - 3e-4 * rec.energy.abs() {
+            self.best_energy = rec.energy;
+            self.stalled = 0;
+        } else {
+            self.stalled += 1;
+            if self.stalled >= STALL_ITERATIONS {
+                self.step = (self.step * 0.5).max(self.params.step_fraction / 16.0);
+                self.stalled = 0;
+            }
+        }
         if flips == 0 && rec.max_displacement < self.params.converge_displacement {
             self.quiet_iterations += 1;
         } else {

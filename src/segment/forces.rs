@@ -90,17 +90,11 @@ struct Facet {
     b: Label,
 }
 
-/// Weights of the internal forces and the force model.
+/// The force model and sampling.
 #[derive(Clone, Copy, Debug)]
 pub struct ForceSettings {
     /// Region force model.
     pub model: ForceModel,
-    /// Rigidity weight β.
-    pub rigidity: f64,
-    /// Elasticity weight α.
-    pub elasticity: f64,
-    /// Edge length L (makes the internal terms dimensionless).
-    pub edge_length: f64,
     /// Sample spacing along facets (pixels).
     pub spacing: f64,
     /// Mean gaps below this count as equal means: no region force across them.
@@ -111,8 +105,13 @@ pub struct ForceSettings {
 #[derive(Clone, Debug, Default)]
 pub struct ForceField<K: Dim> {
     acc: Vec<Acc<K::Point>>,
-    /// Total force per vertex id (zero off the interface).
-    pub force: Vec<K::Point>,
+    /// External (region) force per vertex id, dimensionless for eq. (6).
+    pub external: Vec<K::Point>,
+    /// Bending term `−Δ(ΔX)` per vertex id (pixels), the direction of the
+    /// rigidity force before its weight.
+    pub bending: Vec<K::Point>,
+    /// Umbrella `ΔX` per vertex id (pixels), the direction of the elasticity force.
+    pub stretching: Vec<K::Point>,
     facets: Vec<Facet>,
     star: Vec<CellId>,
     piece: Vec<usize>,
@@ -129,7 +128,9 @@ impl<K: Raster> ForceField<K> {
     pub fn new() -> Self {
         ForceField {
             acc: Vec::new(),
-            force: Vec::new(),
+            external: Vec::new(),
+            bending: Vec::new(),
+            stretching: Vec::new(),
             facets: Vec::new(),
             star: Vec::new(),
             piece: Vec::new(),
@@ -194,7 +195,8 @@ impl<K: Raster> ForceField<K> {
         }
     }
 
-    /// Computes [`ForceField::force`] for every vertex of `complex`.
+    /// Computes the external, bending and stretching terms of every vertex of `complex`.
+    #[allow(clippy::needless_range_loop)] // corners and their points are indexed in pairs
     pub fn compute(
         &mut self,
         complex: &Complex<K>,
@@ -217,8 +219,10 @@ impl<K: Raster> ForceField<K> {
             umbrella: K::Point::zero(),
         };
         self.acc.resize(nv, empty);
-        self.force.clear();
-        self.force.resize(nv, K::Point::zero());
+        for buf in [&mut self.external, &mut self.bending, &mut self.stretching] {
+            buf.clear();
+            buf.resize(nv, K::Point::zero());
+        }
         self.facets.clear();
         self.interface_measure = 0.0;
         self.junctions = (0, 0);
@@ -371,7 +375,6 @@ impl<K: Raster> ForceField<K> {
             }
         }
 
-        let inv_l = 1.0 / s.edge_length;
         for i in 0..nv {
             let acc = &self.acc[i];
             let mut f = K::Point::zero();
@@ -389,6 +392,9 @@ impl<K: Raster> ForceField<K> {
                 }
                 _ => {}
             }
+            if f.is_finite() {
+                self.external[i] = f;
+            }
             let v = VertexId(i as u32);
             if !complex.class(v).on_boundary() {
                 // bending: −Δ(umbrella), sector-averaged like the umbrella itself
@@ -400,13 +406,12 @@ impl<K: Raster> ForceField<K> {
                         m += 1.0;
                     }
                 }
-                if m > 0.0 {
-                    f -= lap * (s.rigidity * inv_l / m);
+                if m > 0.0 && lap.is_finite() {
+                    self.bending[i] = lap * (-1.0 / m);
                 }
-                f += acc.umbrella * (s.elasticity * inv_l);
-            }
-            if f.is_finite() {
-                self.force[i] = f;
+                if acc.umbrella.is_finite() {
+                    self.stretching[i] = acc.umbrella;
+                }
             }
         }
     }
@@ -423,10 +428,10 @@ fn junction_weights<P: Point>(acc: &mut Acc<P>, phases: &PhaseStats, intensity: 
             continue;
         };
         if m <= intensity {
-            if below.map_or(true, |(_, bm)| m > bm) {
+            if below.is_none_or(|(_, bm)| m > bm) {
                 below = Some((sl, m));
             }
-        } else if above.map_or(true, |(_, am)| m < am) {
+        } else if above.is_none_or(|(_, am)| m < am) {
             above = Some((sl, m));
         }
     }

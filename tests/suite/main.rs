@@ -1,8 +1,10 @@
 //! All integration tests in one binary (one link, shared helpers).
 
+mod cli;
 mod common;
 mod determinism;
 mod dsc2d;
 mod figures;
 mod generic;
 mod prop2d;
+mod segment2d;
