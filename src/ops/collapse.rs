@@ -222,8 +222,8 @@ impl<K: Dim> Complex<K> {
         for &c in &star {
             let cell = self.cell(c);
             let pts = self.cell_points(c);
-            for i in 0..K::NV {
-                if cell[i] == w || !self.is_interface_facet(c, i) {
+            for (i, &corner) in cell.iter().enumerate() {
+                if corner == w || !self.is_interface_facet(c, i) {
                     continue;
                 }
                 let nb = self.neighbours(c)[i].expect("interface facets are interior");
