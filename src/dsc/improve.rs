@@ -41,10 +41,30 @@ impl Connectivity for D2 {
 }
 
 impl Connectivity for D3 {
-    /// 3D flips come with the tetrahedral DSC; until then smoothing and
-    /// collapses alone improve 3D meshes.
-    fn improve_connectivity(_complex: &mut Complex<D3>, _params: &DscParams) -> usize {
-        0
+    /// Visits every tet below `low_quality` and tries edge removal (3-2, 4-4 and
+    /// larger rings) on its edges, then 2-3 flips on its facets, off the
+    /// interface, accepting a flip only when the smallest quality of the tets
+    /// involved increases (bounded number of sweeps).
+    fn improve_connectivity(complex: &mut Complex<D3>, params: &DscParams) -> usize {
+        let mut flips = 0;
+        for _sweep in 0..4 {
+            let mut changed = 0;
+            let end = complex.cell_capacity();
+            for c in 0..end {
+                let c = CellId(c as u32);
+                if !complex.is_alive(c) || complex.quality(c) >= params.low_quality {
+                    continue;
+                }
+                if complex.improve_tet(c, 0.0).is_some() {
+                    changed += 1;
+                }
+            }
+            flips += changed;
+            if changed == 0 {
+                break;
+            }
+        }
+        flips
     }
 }
 
@@ -59,6 +79,8 @@ pub struct ImproveStats {
     pub safe_collapses: usize,
     /// Collapses that merged interface vertices (topology may change).
     pub unsafe_collapses: usize,
+    /// Degenerate tets that no collapse could remove, split at their longest edge (3D only).
+    pub degenerate_splits: usize,
 }
 
 impl<K: Connectivity> Complex<K> {
@@ -67,9 +89,10 @@ impl<K: Connectivity> Complex<K> {
         let mut stats = ImproveStats::default();
         stats.smoothed += self.smooth_all();
         stats.flips += K::improve_connectivity(self, params);
-        let (safe, unsafe_) = self.remove_degenerate(params);
+        let (safe, unsafe_, splits) = self.remove_degenerate(params);
         stats.safe_collapses += safe;
         stats.unsafe_collapses += unsafe_;
+        stats.degenerate_splits += splits;
         stats.flips += K::improve_connectivity(self, params);
         stats.smoothed += self.smooth_all();
         stats
@@ -101,10 +124,12 @@ impl<K: Connectivity> Complex<K> {
 
     /// Removes degenerate cells by collapsing their edges, shortest first: a
     /// safe collapse where one exists, otherwise an unsafe one (which may merge
-    /// interfaces: the DSC's topology change). Returns (safe, unsafe) counts.
-    pub fn remove_degenerate(&mut self, params: &DscParams) -> (usize, usize) {
+    /// interfaces: the DSC's topology change). In 3D a degenerate tet that no
+    /// collapse removes is split at its longest edge when that is longer than `L`.
+    /// Returns the (safe, unsafe, split) counts.
+    pub fn remove_degenerate(&mut self, params: &DscParams) -> (usize, usize, usize) {
         let straight_cos = params.straight_angle_deg.to_radians().cos();
-        let (mut safe, mut unsafe_) = (0, 0);
+        let (mut safe, mut unsafe_, mut splits) = (0, 0, 0);
         for _sweep in 0..4 {
             let mut changed = false;
             let end = self.cell_capacity();
@@ -116,6 +141,16 @@ impl<K: Connectivity> Complex<K> {
                 match self.collapse_cell(c, params, straight_cos) {
                     Some(CollapseMode::Safe) => safe += 1,
                     Some(CollapseMode::Unsafe) => unsafe_ += 1,
+                    None if K::N == 3 => {
+                        let (u, v) = self.longest_edge(c);
+                        let long =
+                            crate::dim::Point::length(&(self.position(u) - self.position(v)))
+                                > params.edge_length;
+                        if !(long && self.split_edge(u, v).is_ok()) {
+                            continue;
+                        }
+                        splits += 1;
+                    }
                     None => continue,
                 }
                 changed = true;
@@ -124,7 +159,7 @@ impl<K: Connectivity> Complex<K> {
                 break;
             }
         }
-        (safe, unsafe_)
+        (safe, unsafe_, splits)
     }
 
     /// Tries to collapse one edge of `c`, shortest first, safe before unsafe.

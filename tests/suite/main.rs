@@ -2,4 +2,5 @@
 
 mod common;
 mod dsc2d;
+mod dsc3d;
 mod generic;
