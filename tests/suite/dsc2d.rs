@@ -60,6 +60,7 @@ fn a_shrinking_disk_disappears() {
         });
         c.deform(&d, &p);
         assert_valid(&c);
+        assert_quality(&c);
         assert!(
             step < 59,
             "disk never vanished: {} cells left",
@@ -89,6 +90,7 @@ fn two_disks_pushed_together_merge() {
         });
         c.deform(&d, &p);
         assert_valid(&c);
+        assert_quality(&c);
     }
     assert_eq!(c.components(1), 1);
 }
@@ -111,6 +113,7 @@ fn a_pinched_dumbbell_splits() {
         });
         c.deform(&d, &p);
         assert_valid(&c);
+        assert_quality(&c);
     }
     assert_eq!(c.components(1), 2);
 }

@@ -4,3 +4,4 @@ mod common;
 mod dsc2d;
 mod dsc3d;
 mod generic;
+mod prop2d;
