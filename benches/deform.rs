@@ -33,7 +33,11 @@ fn deform_100k(c: &mut Criterion) {
             moved += 1;
         }
     }
-    eprintln!("{} triangles, {} interface vertices moved per call", mesh.cell_count(), moved);
+    eprintln!(
+        "{} triangles, {} interface vertices moved per call",
+        mesh.cell_count(),
+        moved
+    );
     c.bench_function("deform_100k_triangles", |b| {
         b.iter_batched(
             || mesh.clone(),

@@ -1,1 +1,3 @@
 //! Segmentation.
+
+pub mod voxel3d;

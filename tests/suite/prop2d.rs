@@ -24,7 +24,13 @@ impl Field {
 
 fn field() -> impl Strategy<Value = Field> {
     prop::collection::vec(
-        (-0.15..0.15f64, -0.15..0.15f64, 0.0..6.3f64, -1.0..1.0f64, -1.0..1.0f64),
+        (
+            -0.15..0.15f64,
+            -0.15..0.15f64,
+            0.0..6.3f64,
+            -1.0..1.0f64,
+            -1.0..1.0f64,
+        ),
         1..4,
     )
     .prop_map(|waves| Field { waves })
