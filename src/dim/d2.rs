@@ -47,8 +47,17 @@ impl Dim for D2 {
         if Self::orient(p) <= 0.0 {
             return 0.0;
         }
-        let a = angles(p);
-        (a[0].min(a[1]).min(a[2]) / (std::f64::consts::PI / 3.0)).clamp(0.0, 1.0)
+        // The smallest angle faces the shortest edge and is at most 60°, so
+        // sin θ = 2·area / (product of the two longer edges) determines it
+        // with one asin instead of three atan2.
+        let mut l2 = [
+            (p[1] - p[2]).norm_squared(),
+            (p[2] - p[0]).norm_squared(),
+            (p[0] - p[1]).norm_squared(),
+        ];
+        l2.sort_unstable_by(f64::total_cmp);
+        let sin = (2.0 * Self::signed_measure(p) / (l2[1] * l2[2]).sqrt()).clamp(0.0, 1.0);
+        (sin.asin() / (std::f64::consts::PI / 3.0)).clamp(0.0, 1.0)
     }
     fn regular_measure(l: f64) -> f64 {
         3f64.sqrt() / 4.0 * l * l
@@ -65,5 +74,30 @@ impl Dim for D2 {
     }
     fn facet_measure(p: &[Self::Point], opposite: usize) -> f64 {
         (p[(opposite + 2) % 3] - p[(opposite + 1) % 3]).norm()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quality_is_the_smallest_angle_over_sixty_degrees() {
+        let tri = [
+            Vector2::new(0.0, 0.0),
+            Vector2::new(4.0, 0.0),
+            Vector2::new(1.0, 0.5),
+        ];
+        let by_angles = angles(&tri).iter().copied().fold(f64::INFINITY, f64::min)
+            / (std::f64::consts::PI / 3.0);
+        assert!((D2::quality(&tri) - by_angles).abs() < 1e-12);
+        let equilateral = [
+            Vector2::new(0.0, 0.0),
+            Vector2::new(1.0, 0.0),
+            Vector2::new(0.5, 3f64.sqrt() / 2.0),
+        ];
+        assert!((D2::quality(&equilateral) - 1.0).abs() < 1e-12);
+        let inverted = [tri[0], tri[2], tri[1]];
+        assert_eq!(D2::quality(&inverted), 0.0);
     }
 }

@@ -76,8 +76,10 @@ impl<K: Connectivity> Complex<K> {
             .filter(|&v| destinations.get(v).is_some() && self.is_vertex_alive(v))
             .collect();
         let requested = pending.len();
+        let mut touched = pending.clone();
         while !pending.is_empty() && report.rounds < params.max_rounds {
             report.rounds += 1;
+            let movers = pending.clone();
             pending.retain(|&v| {
                 if !self.is_vertex_alive(v) {
                     return false;
@@ -93,11 +95,12 @@ impl<K: Connectivity> Complex<K> {
                     MoveOutcome::Partial(_) | MoveOutcome::Blocked => true,
                 }
             });
-            add(&mut report.improve, self.improve(params));
+            add(&mut report.improve, self.improve_near(&movers, params));
         }
         report.stopped_short = requested - report.arrived;
-        report.resize = self.resize(params);
-        add(&mut report.improve, self.improve(params));
+        report.resize = self.resize(params, &mut touched);
+        touched.retain(|&v| self.is_vertex_alive(v));
+        add(&mut report.improve, self.improve_near(&touched, params));
         self.compact();
         report
     }

@@ -10,62 +10,114 @@ use serde::Serialize;
 pub trait Connectivity: Dim {
     /// One improvement pass over the whole complex; returns the number of changes.
     fn improve_connectivity(complex: &mut Complex<Self>, params: &DscParams) -> usize;
+    /// Improvement restricted to the cells around `seeds` (by default: everywhere).
+    fn improve_connectivity_near(
+        complex: &mut Complex<Self>,
+        seeds: &[VertexId],
+        params: &DscParams,
+    ) -> usize {
+        let _ = seeds;
+        Self::improve_connectivity(complex, params)
+    }
 }
 
 impl Connectivity for D2 {
     /// Flips non-interface edges until the triangulation is locally Delaunay
     /// within each phase (bounded number of sweeps).
     fn improve_connectivity(complex: &mut Complex<D2>, _params: &DscParams) -> usize {
-        let mut flips = 0;
-        for _sweep in 0..8 {
-            let mut changed = 0;
-            let end = complex.cell_capacity();
-            for c in 0..end {
-                let c = CellId(c as u32);
-                for i in 0..3 {
-                    if !complex.is_alive(c) {
-                        break;
-                    }
-                    if let Ok(true) = complex.flip_if_better(c, i) {
-                        changed += 1;
-                    }
+        flip_sweeps(complex, |c, out| {
+            out.clear();
+            out.extend(c.cell_ids());
+        })
+    }
+
+    fn improve_connectivity_near(
+        complex: &mut Complex<D2>,
+        seeds: &[VertexId],
+        _params: &DscParams,
+    ) -> usize {
+        let mut marks = Vec::new();
+        flip_sweeps(complex, |c, out| c.region_cells(seeds, out, &mut marks))
+    }
+}
+
+/// Flips until nothing changes (at most 8 sweeps) over the cells `region` lists.
+fn flip_sweeps(
+    complex: &mut Complex<D2>,
+    mut region: impl FnMut(&Complex<D2>, &mut Vec<CellId>),
+) -> usize {
+    let mut flips = 0;
+    let mut cells = Vec::new();
+    for _sweep in 0..8 {
+        let mut changed = 0;
+        region(complex, &mut cells);
+        for &c in &cells {
+            for i in 0..3 {
+                if !complex.is_alive(c) {
+                    break;
+                }
+                if let Ok(true) = complex.flip_if_better(c, i) {
+                    changed += 1;
                 }
             }
-            flips += changed;
-            if changed == 0 {
-                break;
-            }
         }
-        flips
+        flips += changed;
+        if changed == 0 {
+            break;
+        }
     }
+    flips
 }
 
 impl Connectivity for D3 {
     /// Visits every tet below `low_quality` and tries edge removal (3-2, 4-4 and
     /// larger rings) on its edges, then 2-3 flips on its facets, off the
     /// interface, accepting a flip only when the smallest quality of the tets
-    /// involved increases (bounded number of sweeps).
+    /// involved increases (at most 4 sweeps).
     fn improve_connectivity(complex: &mut Complex<D3>, params: &DscParams) -> usize {
-        let mut flips = 0;
-        for _sweep in 0..4 {
-            let mut changed = 0;
-            let end = complex.cell_capacity();
-            for c in 0..end {
-                let c = CellId(c as u32);
-                if !complex.is_alive(c) || complex.quality(c) >= params.low_quality {
-                    continue;
-                }
-                if complex.improve_tet(c, 0.0).is_some() {
-                    changed += 1;
-                }
+        tet_flip_sweeps(complex, params, |c, out| {
+            out.clear();
+            out.extend(c.cell_ids());
+        })
+    }
+
+    fn improve_connectivity_near(
+        complex: &mut Complex<D3>,
+        seeds: &[VertexId],
+        params: &DscParams,
+    ) -> usize {
+        let mut marks = Vec::new();
+        tet_flip_sweeps(complex, params, |c, out| {
+            c.region_cells(seeds, out, &mut marks)
+        })
+    }
+}
+
+/// Flips low-quality tets among those `region` lists until nothing changes (at most 4 sweeps).
+fn tet_flip_sweeps(
+    complex: &mut Complex<D3>,
+    params: &DscParams,
+    mut region: impl FnMut(&Complex<D3>, &mut Vec<CellId>),
+) -> usize {
+    let mut flips = 0;
+    let mut cells = Vec::new();
+    for _sweep in 0..4 {
+        let mut changed = 0;
+        region(complex, &mut cells);
+        for &c in &cells {
+            if !complex.is_alive(c) || complex.quality(c) >= params.low_quality {
+                continue;
             }
-            flips += changed;
-            if changed == 0 {
-                break;
+            if complex.improve_tet(c, 0.0).is_some() {
+                changed += 1;
             }
         }
-        flips
+        flips += changed;
+        if changed == 0 {
+            break;
+        }
     }
+    flips
 }
 
 /// Counts of what one improvement did.
@@ -84,30 +136,87 @@ pub struct ImproveStats {
 }
 
 impl<K: Connectivity> Complex<K> {
-    /// Smooths, flips, removes degenerate cells and smooths again.
+    /// Smooths, flips, removes degenerate cells and smooths again, everywhere.
     pub fn improve(&mut self, params: &DscParams) -> ImproveStats {
+        let all: Vec<VertexId> = self.vertex_ids().collect();
+        self.improve_near(&all, params)
+    }
+
+    /// [`improve`](Self::improve) restricted to the cells around `seeds`: the
+    /// deform loop passes the vertices it moved, so the cost follows the
+    /// interface, not the mesh.
+    pub fn improve_near(&mut self, seeds: &[VertexId], params: &DscParams) -> ImproveStats {
         let mut stats = ImproveStats::default();
-        stats.smoothed += self.smooth_all();
-        stats.flips += K::improve_connectivity(self, params);
-        let (safe, unsafe_, splits) = self.remove_degenerate(params);
+        let mut cells = Vec::new();
+        let mut marks = Vec::new();
+        let mut vertices = Vec::new();
+        self.region_cells(seeds, &mut cells, &mut marks);
+        self.region_vertices(&cells, &mut vertices, &mut marks);
+        stats.smoothed += self.smooth_vertices(&vertices);
+        stats.flips += K::improve_connectivity_near(self, seeds, params);
+        self.region_cells(seeds, &mut cells, &mut marks);
+        let (safe, unsafe_, splits) = self.remove_degenerate_in(&cells, params);
         stats.safe_collapses += safe;
         stats.unsafe_collapses += unsafe_;
         stats.degenerate_splits += splits;
-        stats.flips += K::improve_connectivity(self, params);
-        stats.smoothed += self.smooth_all();
+        stats.flips += K::improve_connectivity_near(self, seeds, params);
+        stats.smoothed += self.smooth_vertices(&vertices);
         stats
     }
 
-    /// One Laplacian pass over every non-interface vertex.
-    pub fn smooth_all(&mut self) -> usize {
+    /// The live cells within two rings of `seeds` (each once). `marks` is scratch.
+    pub fn region_cells(&self, seeds: &[VertexId], out: &mut Vec<CellId>, marks: &mut Vec<bool>) {
+        out.clear();
+        marks.clear();
+        marks.resize(self.cell_capacity(), false);
         let mut star = Vec::new();
-        let mut moved = 0;
-        for v in 0..self.vertex_capacity() {
-            if self.smooth_vertex(VertexId(v as u32), &mut star) {
-                moved += 1;
+        let mut ring: Vec<VertexId> = Vec::new();
+        for &v in seeds {
+            if !self.is_vertex_alive(v) {
+                continue;
+            }
+            self.star_into(v, &mut star);
+            for &c in &star {
+                for &w in self.cell(c) {
+                    ring.push(w);
+                }
             }
         }
-        moved
+        ring.sort_unstable();
+        ring.dedup();
+        for &w in &ring {
+            self.star_into(w, &mut star);
+            for &c in &star {
+                if !marks[c.index()] {
+                    marks[c.index()] = true;
+                    out.push(c);
+                }
+            }
+        }
+    }
+
+    /// The vertices of `cells` (each once). `marks` is scratch.
+    fn region_vertices(&self, cells: &[CellId], out: &mut Vec<VertexId>, marks: &mut Vec<bool>) {
+        out.clear();
+        marks.clear();
+        marks.resize(self.vertex_capacity(), false);
+        for &c in cells {
+            for &w in self.cell(c) {
+                if !marks[w.index()] {
+                    marks[w.index()] = true;
+                    out.push(w);
+                }
+            }
+        }
+    }
+
+    /// One Laplacian pass over the given vertices (interface vertices are skipped).
+    pub fn smooth_vertices(&mut self, vertices: &[VertexId]) -> usize {
+        let mut star = Vec::new();
+        vertices
+            .iter()
+            .filter(|&&v| self.smooth_vertex(v, &mut star))
+            .count()
     }
 
     /// Whether a cell is degenerate by quality, measure or edge length.
@@ -128,13 +237,21 @@ impl<K: Connectivity> Complex<K> {
     /// collapse removes is split at its longest edge when that is longer than `L`.
     /// Returns the (safe, unsafe, split) counts.
     pub fn remove_degenerate(&mut self, params: &DscParams) -> (usize, usize, usize) {
+        let all: Vec<CellId> = self.cell_ids().collect();
+        self.remove_degenerate_in(&all, params)
+    }
+
+    /// [`remove_degenerate`](Self::remove_degenerate) over the given cells.
+    pub fn remove_degenerate_in(
+        &mut self,
+        cells: &[CellId],
+        params: &DscParams,
+    ) -> (usize, usize, usize) {
         let straight_cos = params.straight_angle_deg.to_radians().cos();
         let (mut safe, mut unsafe_, mut splits) = (0, 0, 0);
         for _sweep in 0..4 {
             let mut changed = false;
-            let end = self.cell_capacity();
-            for c in 0..end {
-                let c = CellId(c as u32);
+            for &c in cells {
                 if !self.is_alive(c) || !self.is_degenerate(c, params) {
                     continue;
                 }

@@ -23,8 +23,9 @@ pub struct ResizeStats {
 
 impl<K: Connectivity> Complex<K> {
     /// Splits long and collapses short interface edges, splits large and
-    /// collapses small cells, then improves the mesh.
-    pub fn resize(&mut self, params: &DscParams) -> ResizeStats {
+    /// collapses small cells. The vertices it creates or moves are appended to
+    /// `touched`, so that the caller can improve the mesh around them.
+    pub fn resize(&mut self, params: &DscParams, touched: &mut Vec<VertexId>) -> ResizeStats {
         let mut stats = ResizeStats::default();
         let l = params.edge_length;
         let straight_cos = params.straight_angle_deg.to_radians().cos();
@@ -32,9 +33,11 @@ impl<K: Connectivity> Complex<K> {
             if self
                 .edge_length_if_alive(u, v)
                 .is_some_and(|len| len > params.max_length * l)
-                && self.split_edge(u, v).is_ok()
             {
-                stats.interface_splits += 1;
+                if let Ok(m) = self.split_edge(u, v) {
+                    touched.push(m);
+                    stats.interface_splits += 1;
+                }
             }
         }
         for (u, v) in self.interface_edges() {
@@ -59,15 +62,16 @@ impl<K: Connectivity> Complex<K> {
             let m = self.measure(c);
             if m > max_measure {
                 let (u, v) = self.longest_edge(c);
-                if self.split_edge(u, v).is_ok() {
+                if let Ok(m) = self.split_edge(u, v) {
+                    touched.push(m);
                     stats.cell_splits += 1;
                 }
             } else if m < min_measure {
                 let (u, v) = self.shortest_edge(c);
-                if self
-                    .collapse_edge(u, v, CollapseMode::Safe, params.min_quality, straight_cos)
-                    .is_ok()
+                if let Ok(k) =
+                    self.collapse_edge(u, v, CollapseMode::Safe, params.min_quality, straight_cos)
                 {
+                    touched.push(k);
                     stats.cell_collapses += 1;
                 }
             }
