@@ -9,12 +9,14 @@ mod build;
 mod cavity;
 mod class;
 mod ids;
+mod junction;
 mod measure;
 mod validate;
 
 pub use cavity::Rejection;
 pub use class::{VertexClass, VertexKind};
 pub use ids::{CellId, Label, VertexId};
+pub use junction::PhaseContact;
 pub use validate::Finding;
 
 use crate::dim::{Dim, Point, D2, D3};
