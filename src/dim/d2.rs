@@ -10,19 +10,6 @@ fn coord(p: &Vector2<f64>) -> robust::Coord<f64> {
     robust::Coord { x: p.x, y: p.y }
 }
 
-/// Interior angles of a triangle, in radians (the reference the fast quality is tested against).
-#[cfg(test)]
-pub fn angles(p: &[Vector2<f64>]) -> [f64; 3] {
-    let mut out = [0.0; 3];
-    for (i, angle) in out.iter_mut().enumerate() {
-        let a = p[(i + 1) % 3] - p[i];
-        let b = p[(i + 2) % 3] - p[i];
-        let cross = a.x * b.y - a.y * b.x;
-        *angle = cross.abs().atan2(a.dot(&b));
-    }
-    out
-}
-
 impl Dim for D2 {
     const N: usize = 2;
     type Point = Vector2<f64>;
@@ -81,6 +68,18 @@ impl Dim for D2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Interior angles of a triangle, in radians.
+    pub fn angles(p: &[Vector2<f64>]) -> [f64; 3] {
+        let mut out = [0.0; 3];
+        for (i, angle) in out.iter_mut().enumerate() {
+            let a = p[(i + 1) % 3] - p[i];
+            let b = p[(i + 2) % 3] - p[i];
+            let cross = a.x * b.y - a.y * b.x;
+            *angle = cross.abs().atan2(a.dot(&b));
+        }
+        out
+    }
 
     #[test]
     fn quality_is_the_smallest_angle_over_sixty_degrees() {

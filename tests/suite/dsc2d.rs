@@ -168,3 +168,53 @@ impl Complex2Builder {
         c
     }
 }
+
+#[test]
+fn interfaces_slide_along_the_image_border() {
+    let l = 4.0;
+    let mut c = disks(100.0, l, &[(20.0, 50.0, 12.0)]);
+    let p = params(l);
+    for _ in 0..15 {
+        let d = interface_field(&c, |_, _| Vector2::new(-0.4 * l, 0.0));
+        c.deform(&d, &p);
+        assert_valid(&c);
+    }
+    // The object now touches the border: interface vertices lie on x = 0 ...
+    let on_border: Vec<_> = c
+        .vertex_ids()
+        .filter(|&v| c.class(v).on_interface() && c.position(v).x == 0.0)
+        .collect();
+    assert!(on_border.len() >= 2, "interface never reached the border");
+    // ... and they keep sliding along it when pushed sideways.
+    let y0: Vec<f64> = on_border.iter().map(|&v| c.position(v).y).collect();
+    let mut d = dsc_seg::dsc::Destinations::new(&c);
+    for &v in &on_border {
+        d.set(v, c.position(v) + Vector2::new(-1.0, 0.5 * l));
+    }
+    c.deform(&d, &p);
+    assert_valid(&c);
+    let moved = c
+        .vertex_ids()
+        .filter(|&v| c.class(v).on_interface() && c.position(v).x == 0.0)
+        .map(|v| c.position(v).y)
+        .filter(|y| !y0.contains(y))
+        .count();
+    assert!(moved >= 1, "border vertices did not slide");
+}
+
+#[test]
+fn an_unreachable_destination_is_reported_not_an_error() {
+    let l = 4.0;
+    let mut c = disks(60.0, l, &[(30.0, 30.0, 10.0)]);
+    let mut p = params(l);
+    p.max_rounds = 3;
+    // Ask one interface vertex to jump far across the disk in one call.
+    let v = c.vertex_ids().find(|&v| c.class(v).on_interface()).unwrap();
+    let mut d = dsc_seg::dsc::Destinations::new(&c);
+    let target = Vector2::new(60.0, 60.0) - c.position(v);
+    d.set(v, target);
+    let report = c.deform(&d, &p);
+    assert_valid(&c);
+    assert_eq!(report.arrived + report.stopped_short, 1);
+    assert_eq!(report.stopped_short, 1);
+}
