@@ -1,3 +1,4 @@
 //! Segmentation.
 
+pub mod region3d;
 pub mod voxel3d;
