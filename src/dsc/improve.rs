@@ -287,9 +287,20 @@ impl<K: Connectivity> Complex<K> {
         straight_cos: f64,
     ) -> Option<CollapseMode> {
         let edges = self.edges_by_length(c);
+        // Where degenerate cells cluster, a collapse that removes one may leave
+        // the surviving neighbours below the degenerate quality; it is still
+        // accepted if it makes no surviving cell worse than the worst one there.
+        let bounds: Vec<f64> = edges
+            .iter()
+            .map(|&(u, v)| {
+                params
+                    .degenerate_quality
+                    .min(self.worst_surviving_quality(u, v))
+            })
+            .collect();
         for mode in [CollapseMode::Safe, CollapseMode::Unsafe] {
-            for &(u, v) in &edges {
-                match self.collapse_edge(u, v, mode, params.degenerate_quality, straight_cos) {
+            for (&(u, v), &bound) in edges.iter().zip(&bounds) {
+                match self.collapse_edge(u, v, mode, bound, straight_cos) {
                     Ok(_) => return Some(mode),
                     Err(Rejection::Stale) => return None,
                     Err(_) => {}
@@ -297,5 +308,22 @@ impl<K: Connectivity> Complex<K> {
             }
         }
         None
+    }
+
+    /// Worst quality of the cells around `u` or `v` that do not contain the edge
+    /// `uv` (the cells a collapse of `uv` keeps, reshaped).
+    fn worst_surviving_quality(&self, u: VertexId, v: VertexId) -> f64 {
+        let mut star = Vec::new();
+        let mut worst: f64 = 1.0;
+        for w in [u, v] {
+            self.star_into(w, &mut star);
+            for &c in &star {
+                let cell = self.cell(c);
+                if !(cell.contains(&u) && cell.contains(&v)) {
+                    worst = worst.min(self.quality(c));
+                }
+            }
+        }
+        worst
     }
 }
