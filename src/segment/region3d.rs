@@ -355,7 +355,11 @@ mod tests {
             }
         }
         assert!(n > 10);
-        assert!(mean / n as f64 > 0.5, "mean outward force {}", mean / n as f64);
+        assert!(
+            mean / n as f64 > 0.5,
+            "mean outward force {}",
+            mean / n as f64
+        );
         // And the area gradient points outwards too (the regulariser shrinks it).
         let v = c.vertex_ids().find(|&v| c.class(v).on_interface()).unwrap();
         let out = c.position(v) - centre;

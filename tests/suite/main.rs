@@ -5,3 +5,4 @@ mod dsc2d;
 mod dsc3d;
 mod generic;
 mod prop2d;
+mod seg3d;
