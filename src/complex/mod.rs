@@ -8,13 +8,16 @@
 mod build;
 mod cavity;
 mod class;
+mod export;
 mod ids;
 mod junction;
 mod measure;
 mod validate;
 
+pub use build::BuildError;
 pub use cavity::Rejection;
 pub use class::{VertexClass, VertexKind};
+pub use export::MeshArrays;
 pub use ids::{CellId, Label, VertexId};
 pub use junction::PhaseContact;
 pub use validate::Finding;

@@ -1,3 +1,20 @@
-//! File input and output.
+//! File input and output: images, volumes, VTK, figures.
+//!
+//! Everything here works on plain slices and arrays (points, triangles,
+//! labels) so that the mesh code can call it without this module depending on
+//! the mesh types.
 
+pub mod atomic;
+pub mod error;
+pub mod image2;
+pub mod render;
 pub mod surface;
+pub mod volume;
+pub mod vtk;
+
+pub use atomic::{write_atomic, write_bytes_atomic};
+pub use error::IoError;
+pub use image2::{save_gray8_png, save_image_png, Image2};
+pub use render::{phase_color, save_gif, Overlay};
+pub use volume::{save_labels_tiff, save_nifti, Volume};
+pub use vtk::{write_vtp, write_vtu, CellArray, Cells};

@@ -1,0 +1,361 @@
+//! 2D grayscale images with a continuous-coordinate convention.
+//!
+//! # Coordinate convention
+//!
+//! An image of `W × H` pixels covers the continuous domain `[0,W] × [0,H]`.
+//! Pixel `(x, y)` (column `x`, row `y`) covers the unit square
+//! `[x, x+1) × [y, y+1)` and its value is attached to the pixel centre
+//! `(x + 0.5, y + 0.5)`. The `y` axis grows downwards, i.e. it is the row
+//! index, exactly as in the file. Mesh vertices, [`Image2::bilinear`] and the
+//! figure renderer in [`crate::io::render`] all use this convention, so a mesh
+//! whose corners are `(0,0)` and `(W,H)` covers the image exactly.
+//!
+//! # Intensities
+//!
+//! Values are `f32` scaled to `[0,1]`: 8-bit samples are divided by 255,
+//! 16-bit samples by 65535, and floating-point samples are kept as they are
+//! (they may lie outside `[0,1]`). Colour images are reduced to luminance with
+//! the Rec. 709 weights `0.2126 R + 0.7152 G + 0.0722 B`, applied to the stored
+//! (gamma-encoded) values; alpha is ignored.
+
+use std::io::{self, Write};
+use std::path::Path;
+
+use image::{DynamicImage, ImageError, ImageReader};
+
+use super::atomic::write_atomic;
+use super::error::{IoError, Result};
+
+/// Rec. 709 luminance weights for R, G, B.
+const REC709: [f32; 3] = [0.2126, 0.7152, 0.0722];
+
+/// A row-major grayscale image with intensities in `[0,1]`; see the module
+/// documentation for the coordinate convention.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image2 {
+    width: usize,
+    height: usize,
+    data: Vec<f32>,
+}
+
+impl Image2 {
+    /// Wraps row-major `data` (`data[y * width + x]`) as an image.
+    ///
+    /// # Panics
+    /// If `data.len() != width * height`: this is a programming error, not
+    /// a file problem.
+    pub fn from_raw(width: usize, height: usize, data: Vec<f32>) -> Self {
+        assert_eq!(
+            data.len(),
+            width * height,
+            "Image2::from_raw: {} values for a {width}x{height} image",
+            data.len()
+        );
+        Image2 {
+            width,
+            height,
+            data,
+        }
+    }
+
+    /// Builds an image by evaluating `f(x, y)` at every pixel (column `x`,
+    /// row `y`); handy for synthetic test images.
+    pub fn from_fn(width: usize, height: usize, mut f: impl FnMut(usize, usize) -> f32) -> Self {
+        let mut data = Vec::with_capacity(width * height);
+        for y in 0..height {
+            for x in 0..width {
+                data.push(f(x, y));
+            }
+        }
+        Image2 {
+            width,
+            height,
+            data,
+        }
+    }
+
+    /// Loads any image the `image` crate decodes (PNG, JPEG, TIFF, GIF, BMP,
+    /// PNM), 8 or 16 bit or float, gray or colour, converting it to
+    /// luminance in `[0,1]` as described in the module documentation.
+    ///
+    /// Corrupt or truncated files give an error, never a panic.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let reader = ImageReader::open(path)
+            .map_err(|e| IoError::unreadable(path, e))?
+            .with_guessed_format()
+            .map_err(|e| IoError::unreadable(path, e))?;
+        let img = reader.decode().map_err(|e| image_error(path, e))?;
+        Self::from_dynamic(path, img)
+    }
+
+    /// Converts a decoded [`DynamicImage`] (`path` is only used in errors).
+    pub(crate) fn from_dynamic(path: &Path, img: DynamicImage) -> Result<Self> {
+        let (width, height) = (img.width() as usize, img.height() as usize);
+        if width == 0 || height == 0 {
+            return Err(IoError::empty(path, &[width, height]));
+        }
+        let lum = |r: f32, g: f32, b: f32| REC709[0] * r + REC709[1] * g + REC709[2] * b;
+        let data: Vec<f32> = match img {
+            DynamicImage::ImageLuma8(b) => b.pixels().map(|p| p[0] as f32 / 255.0).collect(),
+            DynamicImage::ImageLumaA8(b) => b.pixels().map(|p| p[0] as f32 / 255.0).collect(),
+            DynamicImage::ImageLuma16(b) => b.pixels().map(|p| p[0] as f32 / 65535.0).collect(),
+            DynamicImage::ImageLumaA16(b) => b.pixels().map(|p| p[0] as f32 / 65535.0).collect(),
+            DynamicImage::ImageRgb8(b) => b
+                .pixels()
+                .map(|p| lum(p[0] as f32, p[1] as f32, p[2] as f32) / 255.0)
+                .collect(),
+            DynamicImage::ImageRgba8(b) => b
+                .pixels()
+                .map(|p| lum(p[0] as f32, p[1] as f32, p[2] as f32) / 255.0)
+                .collect(),
+            DynamicImage::ImageRgb16(b) => b
+                .pixels()
+                .map(|p| lum(p[0] as f32, p[1] as f32, p[2] as f32) / 65535.0)
+                .collect(),
+            DynamicImage::ImageRgba16(b) => b
+                .pixels()
+                .map(|p| lum(p[0] as f32, p[1] as f32, p[2] as f32) / 65535.0)
+                .collect(),
+            DynamicImage::ImageRgb32F(b) => b.pixels().map(|p| lum(p[0], p[1], p[2])).collect(),
+            DynamicImage::ImageRgba32F(b) => b.pixels().map(|p| lum(p[0], p[1], p[2])).collect(),
+            other => {
+                return Err(IoError::Unsupported {
+                    path: path.to_path_buf(),
+                    reason: format!("pixel type {:?}", other.color()),
+                })
+            }
+        };
+        Ok(Image2 {
+            width,
+            height,
+            data,
+        })
+    }
+
+    /// Number of columns `W`.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Number of rows `H`.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// `(width, height)`.
+    pub fn dims(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// The row-major pixel values, `data[y * width + x]`.
+    pub fn data(&self) -> &[f32] {
+        &self.data
+    }
+
+    /// Mutable access to the row-major pixel values.
+    pub fn data_mut(&mut self) -> &mut [f32] {
+        &mut self.data
+    }
+
+    /// Consumes the image and returns its row-major pixel values.
+    pub fn into_data(self) -> Vec<f32> {
+        self.data
+    }
+
+    /// The value of pixel (column `x`, row `y`).
+    ///
+    /// # Panics
+    /// If the pixel is outside the image.
+    pub fn get(&self, x: usize, y: usize) -> f32 {
+        assert!(x < self.width && y < self.height, "pixel ({x},{y}) outside");
+        self.data[y * self.width + x]
+    }
+
+    /// Bilinear interpolation at the continuous point `(x, y)`, with pixel
+    /// centres `(i + 0.5, j + 0.5)` as nodes. Outside the centre grid (the
+    /// outer half pixel and beyond) the coordinates are clamped, so the value
+    /// is constant along the border normal; non-finite inputs are clamped too.
+    pub fn bilinear(&self, x: f64, y: f64) -> f32 {
+        let (i0, i1, tx) = lerp_nodes(x, self.width);
+        let (j0, j1, ty) = lerp_nodes(y, self.height);
+        let w = self.width;
+        let d = &self.data;
+        let top = d[j0 * w + i0] * (1.0 - tx) + d[j0 * w + i1] * tx;
+        let bot = d[j1 * w + i0] * (1.0 - tx) + d[j1 * w + i1] * tx;
+        top * (1.0 - ty) + bot * ty
+    }
+
+    /// Saves the image as an 8-bit grayscale PNG (values clamped to `[0,1]`
+    /// and rounded), atomically.
+    pub fn save_png(&self, path: impl AsRef<Path>) -> Result<()> {
+        save_image_png(path, self)
+    }
+}
+
+/// For a continuous coordinate `c` on an axis of `n` pixels, returns the two
+/// neighbouring pixel-centre indices and the interpolation weight of the
+/// second, with clamping at the border. Shared with [`crate::io::volume`].
+pub(crate) fn lerp_nodes(c: f64, n: usize) -> (usize, usize, f32) {
+    debug_assert!(n > 0);
+    let max = (n - 1) as f64;
+    // `f64::clamp` propagates NaN; map it to the first node instead.
+    let u = if c.is_nan() {
+        0.0
+    } else {
+        (c - 0.5).clamp(0.0, max)
+    };
+    let i0 = u.floor() as usize;
+    let i1 = (i0 + 1).min(n - 1);
+    (i0, i1, (u - i0 as f64) as f32)
+}
+
+/// Maps an `image` crate error to an [`IoError`] naming `path`.
+pub(crate) fn image_error(path: &Path, e: ImageError) -> IoError {
+    match e {
+        ImageError::Unsupported(u) => IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: u.to_string(),
+        },
+        ImageError::IoError(io) if io.kind() != io::ErrorKind::UnexpectedEof => {
+            IoError::unreadable(path, io)
+        }
+        other => IoError::NotAnImage {
+            path: path.to_path_buf(),
+            reason: other.to_string(),
+        },
+    }
+}
+
+/// Saves `pixels` (row-major, `width * height` bytes) as an 8-bit grayscale
+/// PNG, atomically (see [`crate::io::write_atomic`]).
+pub fn save_gray8_png(
+    path: impl AsRef<Path>,
+    width: usize,
+    height: usize,
+    pixels: &[u8],
+) -> Result<()> {
+    let path = path.as_ref();
+    if pixels.len() != width * height {
+        return Err(IoError::invalid(
+            path,
+            format!("{} bytes for a {width}x{height} image", pixels.len()),
+        ));
+    }
+    encode_png_atomic(path, width, height, pixels, image::ExtendedColorType::L8)
+}
+
+/// Saves an [`Image2`] as an 8-bit grayscale PNG (values clamped to `[0,1]`,
+/// scaled by 255 and rounded), atomically.
+pub fn save_image_png(path: impl AsRef<Path>, image: &Image2) -> Result<()> {
+    let bytes: Vec<u8> = image.data.iter().map(|&v| unit_to_u8(v)).collect();
+    save_gray8_png(path, image.width, image.height, &bytes)
+}
+
+/// Converts a `[0,1]` intensity to a byte (clamped, rounded; NaN maps to 0).
+pub(crate) fn unit_to_u8(v: f32) -> u8 {
+    if v.is_nan() {
+        0
+    } else {
+        (v.clamp(0.0, 1.0) * 255.0).round() as u8
+    }
+}
+
+/// PNG-encodes raw pixel bytes of the given colour type into `path`
+/// atomically.
+pub(crate) fn encode_png_atomic(
+    path: &Path,
+    width: usize,
+    height: usize,
+    pixels: &[u8],
+    color: image::ExtendedColorType,
+) -> Result<()> {
+    use image::ImageEncoder;
+    let (w, h) = match (u32::try_from(width), u32::try_from(height)) {
+        (Ok(w), Ok(h)) => (w, h),
+        _ => return Err(IoError::invalid(path, "image too large for PNG")),
+    };
+    write_atomic(path, |out: &mut dyn Write| {
+        image::codecs::png::PngEncoder::new(out)
+            .write_image(pixels, w, h, color)
+            .map_err(io::Error::other)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp() -> Image2 {
+        Image2::from_fn(4, 3, |x, y| (x + 10 * y) as f32)
+    }
+
+    #[test]
+    fn bilinear_hits_pixel_centres_and_interpolates() {
+        let im = ramp();
+        assert_eq!(im.bilinear(0.5, 0.5), 0.0);
+        assert_eq!(im.bilinear(3.5, 2.5), 23.0);
+        assert!((im.bilinear(1.0, 0.5) - 0.5).abs() < 1e-6);
+        assert!((im.bilinear(2.0, 1.0) - 6.5).abs() < 1e-6);
+        // Clamped at and beyond the border.
+        assert_eq!(im.bilinear(0.0, 0.0), 0.0);
+        assert_eq!(im.bilinear(-5.0, 100.0), 20.0);
+        assert_eq!(im.bilinear(4.0, 3.0), 23.0);
+        assert_eq!(im.bilinear(f64::NAN, 0.5), 0.0);
+    }
+
+    #[test]
+    fn png_roundtrip_8_and_16_bit_and_colour() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("g8.png");
+        save_gray8_png(&p, 3, 2, &[0, 51, 255, 102, 153, 204]).unwrap();
+        let im = Image2::load(&p).unwrap();
+        assert_eq!(im.dims(), (3, 2));
+        assert!((im.get(1, 0) - 0.2).abs() < 1e-6);
+        assert_eq!(im.get(2, 0), 1.0);
+        assert!((im.get(2, 1) - 0.8).abs() < 1e-6);
+
+        let p16 = dir.path().join("g16.png");
+        image::ImageBuffer::<image::Luma<u16>, _>::from_raw(2, 1, vec![0u16, 65535])
+            .unwrap()
+            .save(&p16)
+            .unwrap();
+        let im = Image2::load(&p16).unwrap();
+        assert_eq!(im.data(), &[0.0, 1.0]);
+
+        let prgb = dir.path().join("rgb.png");
+        image::RgbImage::from_raw(2, 1, vec![255, 0, 0, 0, 255, 0])
+            .unwrap()
+            .save(&prgb)
+            .unwrap();
+        let im = Image2::load(&prgb).unwrap();
+        assert!((im.get(0, 0) - 0.2126).abs() < 1e-6);
+        assert!((im.get(1, 0) - 0.7152).abs() < 1e-6);
+    }
+
+    #[test]
+    fn truncated_and_garbage_files_are_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("ok.png");
+        let im = Image2::from_fn(32, 32, |x, y| ((x * y) % 7) as f32 / 7.0);
+        im.save_png(&p).unwrap();
+        let bytes = std::fs::read(&p).unwrap();
+        for cut in [0, 8, 20, 40, bytes.len() / 2, bytes.len() - 5] {
+            let t = dir.path().join(format!("cut{cut}.png"));
+            std::fs::write(&t, &bytes[..cut]).unwrap();
+            let e = Image2::load(&t).unwrap_err();
+            assert!(e.to_string().contains(&format!("cut{cut}.png")), "{e}");
+        }
+        let g = dir.path().join("garbage.png");
+        std::fs::write(&g, b"this is not an image at all").unwrap();
+        assert!(Image2::load(&g).is_err());
+        let missing = Image2::load(dir.path().join("missing.png")).unwrap_err();
+        assert!(matches!(missing, IoError::Unreadable { .. }));
+    }
+
+    #[test]
+    fn save_checks_length() {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(save_gray8_png(dir.path().join("x.png"), 2, 2, &[0; 3]).is_err());
+    }
+}

@@ -1,0 +1,1057 @@
+//! 3D grayscale volumes: TIFF stacks, folders of slices and NIfTI-1.
+//!
+//! # Layout and coordinates
+//!
+//! A [`Volume`] of `nx × ny × nz` voxels stores `data[x + nx * (y + ny * z)]`
+//! (x fastest, then y, then z). The continuous convention is the 3D analogue
+//! of [`crate::io::image2`]: the domain is `[0,nx] × [0,ny] × [0,nz]` in voxel
+//! units, voxel `(x,y,z)` covers `[x,x+1) × [y,y+1) × [z,z+1)` and its value
+//! sits at the centre `(x+0.5, y+0.5, z+0.5)`. For a TIFF stack or a folder
+//! of slices, `x` is the column, `y` the row (growing downwards) and `z` the
+//! page/slice index. The physical voxel size is kept in [`Volume::spacing`]
+//! as metadata only; all coordinates here are in voxel units.
+//!
+//! # Intensities
+//!
+//! Values are `f32` in `[0,1]`: unsigned 8-bit data is divided by 255 and
+//! unsigned 16-bit data by 65535. Every other sample type (signed integers,
+//! 32-bit integers, floats, or NIfTI data with a non-trivial
+//! `scl_slope`/`scl_inter`) is mapped linearly by the data's own minimum and
+//! maximum to `[0,1]` (a constant volume becomes all zeros; NaNs become 0).
+//! Slices loaded from a folder follow [`Image2::load`] per slice.
+
+use std::cmp::Ordering;
+use std::fs::File;
+use std::io::{BufReader, Cursor, Read};
+use std::path::{Path, PathBuf};
+
+use super::atomic::{write_atomic, write_bytes_atomic};
+use super::error::{IoError, Result};
+use super::image2::{lerp_nodes, Image2};
+
+/// A 3D grayscale volume (x fastest, then y, then z) with intensities in
+/// `[0,1]` and a physical voxel spacing; see the module documentation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Volume {
+    nx: usize,
+    ny: usize,
+    nz: usize,
+    data: Vec<f32>,
+    spacing: [f64; 3],
+}
+
+impl Volume {
+    /// Wraps `data` (`data[x + nx * (y + ny * z)]`) as a volume with unit
+    /// spacing.
+    ///
+    /// # Panics
+    /// If `data.len() != nx * ny * nz` (a programming error).
+    pub fn from_raw(nx: usize, ny: usize, nz: usize, data: Vec<f32>) -> Self {
+        assert_eq!(
+            data.len(),
+            nx * ny * nz,
+            "Volume::from_raw: {} values for {nx}x{ny}x{nz}",
+            data.len()
+        );
+        Volume {
+            nx,
+            ny,
+            nz,
+            data,
+            spacing: [1.0; 3],
+        }
+    }
+
+    /// Builds a volume by evaluating `f(x, y, z)` at every voxel.
+    pub fn from_fn(
+        nx: usize,
+        ny: usize,
+        nz: usize,
+        mut f: impl FnMut(usize, usize, usize) -> f32,
+    ) -> Self {
+        let mut data = Vec::with_capacity(nx * ny * nz);
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    data.push(f(x, y, z));
+                }
+            }
+        }
+        Self::from_raw(nx, ny, nz, data)
+    }
+
+    /// Returns the volume with the given physical voxel size (x, y, z).
+    pub fn with_spacing(mut self, spacing: [f64; 3]) -> Self {
+        self.spacing = spacing;
+        self
+    }
+
+    /// Loads a volume, choosing the reader from the path:
+    /// a directory is read as a stack of 2D slices ([`Volume::load_slices`]),
+    /// `.nii`/`.nii.gz` as NIfTI-1 ([`Volume::load_nifti`]) and `.tif`/`.tiff`
+    /// as a multi-page TIFF stack ([`Volume::load_tiff`]).
+    pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        if path.is_dir() {
+            return Self::load_slices(path);
+        }
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        if name.ends_with(".nii") || name.ends_with(".nii.gz") {
+            Self::load_nifti(path)
+        } else if name.ends_with(".tif") || name.ends_with(".tiff") {
+            Self::load_tiff(path)
+        } else {
+            Err(IoError::UnknownType {
+                path: path.to_path_buf(),
+                reason: "expected a directory of slices, .tif/.tiff or .nii/.nii.gz".into(),
+            })
+        }
+    }
+
+    /// Loads a multi-page grayscale TIFF (8/16/32-bit integer or 32/64-bit
+    /// float samples, one page per z slice) as written by Fiji/ImageJ or
+    /// tifffile. All pages must have the same size. The spacing is taken
+    /// from Fiji/ImageJ metadata when present (unit spacing otherwise).
+    pub fn load_tiff(path: impl AsRef<Path>) -> Result<Self> {
+        use tiff::decoder::{Decoder, DecodingResult};
+        let path = path.as_ref();
+        let file = File::open(path).map_err(|e| IoError::unreadable(path, e))?;
+        let bad = |e: tiff::TiffError| IoError::MalformedTiff {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        };
+        let mut dec = Decoder::new(BufReader::new(file)).map_err(bad)?;
+        let spacing = imagej_spacing(&mut dec);
+        let mut raw = Samples::U8(Vec::new());
+        let (mut nx, mut ny, mut nz) = (0usize, 0usize, 0usize);
+        loop {
+            let (w, h) = dec.dimensions().map_err(bad)?;
+            let (w, h) = (w as usize, h as usize);
+            if nz == 0 {
+                (nx, ny) = (w, h);
+                if nx == 0 || ny == 0 {
+                    return Err(IoError::empty(path, &[nx, ny]));
+                }
+            } else if (w, h) != (nx, ny) {
+                return Err(IoError::DimensionMismatch {
+                    path: path.to_path_buf(),
+                    reason: format!("page {nz} is {w}x{h}, page 0 is {nx}x{ny}"),
+                });
+            }
+            match dec.colortype().map_err(bad)? {
+                tiff::ColorType::Gray(_) => {}
+                other => {
+                    return Err(IoError::Unsupported {
+                        path: path.to_path_buf(),
+                        reason: format!("page {nz} has colour type {other:?}, expected grayscale"),
+                    })
+                }
+            }
+            let page = dec.read_image().map_err(bad)?;
+            let ok = match (&mut raw, page) {
+                (Samples::U8(v), DecodingResult::U8(p)) if nz == 0 || !v.is_empty() => {
+                    v.extend(p);
+                    true
+                }
+                (Samples::U16(v), DecodingResult::U16(p)) => {
+                    v.extend(p);
+                    true
+                }
+                (Samples::F64(v), p) if nz > 0 => append_f64(v, p),
+                (_, DecodingResult::U16(p)) if nz == 0 => {
+                    raw = Samples::U16(p);
+                    true
+                }
+                (_, p) if nz == 0 => {
+                    let mut v = Vec::new();
+                    let ok = append_f64(&mut v, p);
+                    raw = Samples::F64(v);
+                    ok
+                }
+                _ => false,
+            };
+            if !ok {
+                return Err(IoError::Unsupported {
+                    path: path.to_path_buf(),
+                    reason: format!("page {nz} has a different or unsupported sample type"),
+                });
+            }
+            nz += 1;
+            if raw.len() != nx * ny * nz {
+                return Err(IoError::MalformedTiff {
+                    path: path.to_path_buf(),
+                    reason: format!("page {} holds the wrong number of samples", nz - 1),
+                });
+            }
+            if !dec.more_images() {
+                break;
+            }
+            dec.next_image().map_err(bad)?;
+        }
+        Ok(Volume {
+            nx,
+            ny,
+            nz,
+            data: raw.normalise(),
+            spacing,
+        })
+    }
+
+    /// Loads a directory of 2D slices (any format [`Image2::load`] reads),
+    /// sorted in natural filename order (`s2.png` before `s10.png`); hidden
+    /// files and files with non-image extensions are skipped. All slices must
+    /// have the same size.
+    pub fn load_slices(dir: impl AsRef<Path>) -> Result<Self> {
+        const EXTS: &[&str] = &[
+            "png", "jpg", "jpeg", "tif", "tiff", "gif", "bmp", "pgm", "ppm", "pnm", "pbm", "pam",
+        ];
+        let dir = dir.as_ref();
+        let mut files: Vec<PathBuf> = Vec::new();
+        for entry in std::fs::read_dir(dir).map_err(|e| IoError::unreadable(dir, e))? {
+            let p = entry.map_err(|e| IoError::unreadable(dir, e))?.path();
+            let name = p.file_name().unwrap_or_default().to_string_lossy();
+            let ext = p
+                .extension()
+                .map(|e| e.to_string_lossy().to_ascii_lowercase())
+                .unwrap_or_default();
+            if p.is_file() && !name.starts_with('.') && EXTS.contains(&ext.as_str()) {
+                files.push(p);
+            }
+        }
+        if files.is_empty() {
+            return Err(IoError::empty(dir, &[0, 0, 0]));
+        }
+        files.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
+        let mut data = Vec::new();
+        let (mut nx, mut ny) = (0, 0);
+        for (z, f) in files.iter().enumerate() {
+            let im = Image2::load(f)?;
+            if z == 0 {
+                (nx, ny) = im.dims();
+            } else if im.dims() != (nx, ny) {
+                return Err(IoError::DimensionMismatch {
+                    path: f.clone(),
+                    reason: format!(
+                        "slice is {}x{}, first slice {} is {nx}x{ny}",
+                        im.width(),
+                        im.height(),
+                        files[0].display()
+                    ),
+                });
+            }
+            data.extend_from_slice(im.data());
+        }
+        Ok(Self::from_raw(nx, ny, files.len(), data))
+    }
+
+    /// Loads a single-file NIfTI-1 volume (`.nii`, or gzip-compressed
+    /// `.nii.gz`), either endianness, with datatype uint8, int8, int16,
+    /// uint16, int32, uint32, float32 or float64. `scl_slope`/`scl_inter`
+    /// are applied, `pixdim[1..=3]` gives the spacing, and the voxel axes are
+    /// used as stored (the qform/sform orientation is ignored). Dimensions
+    /// beyond the third must be 1.
+    pub fn load_nifti(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let mut bytes = std::fs::read(path).map_err(|e| IoError::unreadable(path, e))?;
+        if bytes.starts_with(&[0x1f, 0x8b]) {
+            let mut out = Vec::new();
+            flate2::read::MultiGzDecoder::new(&bytes[..])
+                .read_to_end(&mut out)
+                .map_err(|e| IoError::MalformedNifti {
+                    path: path.to_path_buf(),
+                    reason: format!("bad gzip data: {e}"),
+                })?;
+            bytes = out;
+        }
+        parse_nifti(path, &bytes)
+    }
+
+    /// Number of voxels along x.
+    pub fn nx(&self) -> usize {
+        self.nx
+    }
+
+    /// Number of voxels along y.
+    pub fn ny(&self) -> usize {
+        self.ny
+    }
+
+    /// Number of voxels along z.
+    pub fn nz(&self) -> usize {
+        self.nz
+    }
+
+    /// `[nx, ny, nz]`.
+    pub fn dims(&self) -> [usize; 3] {
+        [self.nx, self.ny, self.nz]
+    }
+
+    /// Physical voxel size along x, y, z (1 when unknown).
+    pub fn spacing(&self) -> [f64; 3] {
+        self.spacing
+    }
+
+    /// The voxel values, `data[x + nx * (y + ny * z)]`.
+    pub fn data(&self) -> &[f32] {
+        &self.data
+    }
+
+    /// Mutable access to the voxel values.
+    pub fn data_mut(&mut self) -> &mut [f32] {
+        &mut self.data
+    }
+
+    /// Consumes the volume and returns its voxel values.
+    pub fn into_data(self) -> Vec<f32> {
+        self.data
+    }
+
+    /// The linear index of voxel `(x, y, z)`.
+    pub fn index(&self, x: usize, y: usize, z: usize) -> usize {
+        x + self.nx * (y + self.ny * z)
+    }
+
+    /// The value of voxel `(x, y, z)`.
+    ///
+    /// # Panics
+    /// If the voxel is outside the volume.
+    pub fn get(&self, x: usize, y: usize, z: usize) -> f32 {
+        assert!(
+            x < self.nx && y < self.ny && z < self.nz,
+            "voxel ({x},{y},{z}) outside"
+        );
+        self.data[self.index(x, y, z)]
+    }
+
+    /// Trilinear interpolation at the continuous point `(x, y, z)` (voxel
+    /// units) with voxel centres as nodes, clamped at the border.
+    pub fn trilinear(&self, x: f64, y: f64, z: f64) -> f32 {
+        let (i0, i1, tx) = lerp_nodes(x, self.nx);
+        let (j0, j1, ty) = lerp_nodes(y, self.ny);
+        let (k0, k1, tz) = lerp_nodes(z, self.nz);
+        let v = |i, j, k| self.data[self.index(i, j, k)];
+        let lx = |j, k| v(i0, j, k) * (1.0 - tx) + v(i1, j, k) * tx;
+        let ly = |k| lx(j0, k) * (1.0 - ty) + lx(j1, k) * ty;
+        ly(k0) * (1.0 - tz) + ly(k1) * tz
+    }
+}
+
+/// Best-effort voxel size from Fiji/ImageJ metadata on the current (first)
+/// page: x/y from the `XResolution`/`YResolution` tags (pixels per unit) and
+/// z from `spacing=` in an `ImageJ=` image description. Anything missing or
+/// unusable gives 1; other writers' metadata is not interpreted.
+fn imagej_spacing<R: std::io::Read + std::io::Seek>(
+    dec: &mut tiff::decoder::Decoder<R>,
+) -> [f64; 3] {
+    use tiff::decoder::ifd::Value;
+    use tiff::tags::Tag;
+    let mut spacing = [1.0; 3];
+    let Ok(Some(Value::Ascii(desc))) = dec.find_tag(Tag::ImageDescription) else {
+        return spacing;
+    };
+    if !desc.starts_with("ImageJ=") {
+        return spacing;
+    }
+    let valid = |v: f64| v.is_finite() && v > 0.0;
+    for (axis, tag) in [(0, Tag::XResolution), (1, Tag::YResolution)] {
+        if let Ok(Some(Value::Rational(n, d))) = dec.find_tag(tag) {
+            let v = f64::from(d) / f64::from(n);
+            if valid(v) {
+                spacing[axis] = v;
+            }
+        }
+    }
+    if let Some(z) = desc
+        .lines()
+        .find_map(|l| l.strip_prefix("spacing="))
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|&v| valid(v))
+    {
+        spacing[2] = z;
+    }
+    spacing
+}
+
+/// Raw samples collected while reading a TIFF stack.
+enum Samples {
+    U8(Vec<u8>),
+    U16(Vec<u16>),
+    F64(Vec<f64>),
+}
+
+impl Samples {
+    fn len(&self) -> usize {
+        match self {
+            Samples::U8(v) => v.len(),
+            Samples::U16(v) => v.len(),
+            Samples::F64(v) => v.len(),
+        }
+    }
+
+    fn normalise(self) -> Vec<f32> {
+        match self {
+            Samples::U8(v) => v.into_iter().map(|s| s as f32 / 255.0).collect(),
+            Samples::U16(v) => v.into_iter().map(|s| s as f32 / 65535.0).collect(),
+            Samples::F64(v) => min_max_normalise(&v),
+        }
+    }
+}
+
+/// Appends a decoded TIFF page of any non-8/16-bit-unsigned type as `f64`;
+/// returns false for types we cannot convert.
+fn append_f64(v: &mut Vec<f64>, page: tiff::decoder::DecodingResult) -> bool {
+    use tiff::decoder::DecodingResult as D;
+    match page {
+        D::U8(p) => v.extend(p.into_iter().map(f64::from)),
+        D::U16(p) => v.extend(p.into_iter().map(f64::from)),
+        D::U32(p) => v.extend(p.into_iter().map(f64::from)),
+        D::U64(p) => v.extend(p.into_iter().map(|s| s as f64)),
+        D::I8(p) => v.extend(p.into_iter().map(f64::from)),
+        D::I16(p) => v.extend(p.into_iter().map(f64::from)),
+        D::I32(p) => v.extend(p.into_iter().map(f64::from)),
+        D::I64(p) => v.extend(p.into_iter().map(|s| s as f64)),
+        D::F16(p) => v.extend(p.into_iter().map(|s| f64::from(s.to_f32()))),
+        D::F32(p) => v.extend(p.into_iter().map(f64::from)),
+        D::F64(p) => v.extend(p),
+        #[allow(unreachable_patterns)]
+        _ => return false,
+    }
+    true
+}
+
+/// Maps values linearly so that the finite minimum becomes 0 and the maximum
+/// 1; constant data becomes 0, NaN becomes 0.
+fn min_max_normalise(v: &[f64]) -> Vec<f32> {
+    let (lo, hi) = v
+        .iter()
+        .filter(|s| s.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &s| {
+            (lo.min(s), hi.max(s))
+        });
+    let range = hi - lo;
+    v.iter()
+        .map(|&s| {
+            if range.is_nan() || range <= 0.0 || s.is_nan() {
+                0.0
+            } else {
+                ((s - lo) / range).clamp(0.0, 1.0) as f32
+            }
+        })
+        .collect()
+}
+
+/// Compares strings in natural order: runs of ASCII digits compare by
+/// numeric value, everything else character by character.
+pub(crate) fn natural_cmp(a: &str, b: &str) -> Ordering {
+    let (mut a, mut b) = (a.as_bytes(), b.as_bytes());
+    loop {
+        match (a.first(), b.first()) {
+            (None, None) => return Ordering::Equal,
+            (None, Some(_)) => return Ordering::Less,
+            (Some(_), None) => return Ordering::Greater,
+            (Some(x), Some(y)) if x.is_ascii_digit() && y.is_ascii_digit() => {
+                let da = a.iter().take_while(|c| c.is_ascii_digit()).count();
+                let db = b.iter().take_while(|c| c.is_ascii_digit()).count();
+                let (na, nb) = (&a[..da], &b[..db]);
+                // Compare numerically without overflow: strip leading zeros,
+                // then by length, then lexicographically.
+                let strip = |s: &[u8]| {
+                    let z = s.iter().take_while(|&&c| c == b'0').count();
+                    s[z..].to_vec()
+                };
+                let (sa, sb) = (strip(na), strip(nb));
+                let ord = sa
+                    .len()
+                    .cmp(&sb.len())
+                    .then_with(|| sa.cmp(&sb))
+                    .then_with(|| da.cmp(&db));
+                if ord != Ordering::Equal {
+                    return ord;
+                }
+                a = &a[da..];
+                b = &b[db..];
+            }
+            (Some(x), Some(y)) => {
+                if x != y {
+                    return x.cmp(y);
+                }
+                a = &a[1..];
+                b = &b[1..];
+            }
+        }
+    }
+}
+
+/// Size of a NIfTI-1 header.
+const NIFTI_HDR: usize = 348;
+
+/// Parses a decompressed single-file NIfTI-1 image.
+fn parse_nifti(path: &Path, b: &[u8]) -> Result<Volume> {
+    let bad = |reason: String| IoError::MalformedNifti {
+        path: path.to_path_buf(),
+        reason,
+    };
+    if b.len() < NIFTI_HDR {
+        return Err(bad(format!(
+            "file has {} bytes, shorter than the 348-byte header",
+            b.len()
+        )));
+    }
+    let le = match (
+        i32::from_le_bytes(b[0..4].try_into().expect("4 bytes")),
+        i32::from_be_bytes(b[0..4].try_into().expect("4 bytes")),
+    ) {
+        (348, _) => true,
+        (_, 348) => false,
+        (v, _) => return Err(bad(format!("sizeof_hdr is {v}, expected 348"))),
+    };
+    let i16_at = |o: usize| {
+        let a = [b[o], b[o + 1]];
+        if le {
+            i16::from_le_bytes(a)
+        } else {
+            i16::from_be_bytes(a)
+        }
+    };
+    let f32_at = |o: usize| {
+        let a = [b[o], b[o + 1], b[o + 2], b[o + 3]];
+        if le {
+            f32::from_le_bytes(a)
+        } else {
+            f32::from_be_bytes(a)
+        }
+    };
+    match &b[344..348] {
+        b"n+1\0" => {}
+        b"ni1\0" => return Err(bad("two-file NIfTI (.hdr/.img) is not supported".into())),
+        m => return Err(bad(format!("bad magic {m:?}, expected \"n+1\""))),
+    }
+    let dim: Vec<i16> = (0..8).map(|i| i16_at(40 + 2 * i)).collect();
+    let ndim = dim[0];
+    if !(1..=7).contains(&ndim) {
+        return Err(bad(format!("dim[0] = {ndim}, expected 1..7")));
+    }
+    let ndim = ndim as usize;
+    let mut n = [1usize; 3];
+    for (i, d) in dim[1..=ndim].iter().enumerate() {
+        if *d < 0 {
+            return Err(bad(format!("dim[{}] = {d} is negative", i + 1)));
+        }
+        if i < 3 {
+            n[i] = *d as usize;
+        } else if *d > 1 {
+            return Err(IoError::Unsupported {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "{ndim}-D NIfTI with dim[{}] = {d}; only 3-D is supported",
+                    i + 1
+                ),
+            });
+        }
+    }
+    if n.contains(&0) {
+        return Err(IoError::empty(path, &n));
+    }
+    let datatype = i16_at(70);
+    let bitpix = i16_at(72);
+    let (bytes_per, expected_bitpix) = match datatype {
+        2 | 256 => (1, 8),
+        4 | 512 => (2, 16),
+        8 | 16 | 768 => (4, 32),
+        64 => (8, 64),
+        t => {
+            return Err(IoError::Unsupported {
+                path: path.to_path_buf(),
+                reason: format!("NIfTI datatype {t}"),
+            })
+        }
+    };
+    if bitpix != expected_bitpix {
+        return Err(bad(format!(
+            "bitpix {bitpix} does not match datatype {datatype}"
+        )));
+    }
+    let vox_offset = f32_at(108);
+    if !vox_offset.is_finite() || vox_offset < NIFTI_HDR as f32 || vox_offset.fract() != 0.0 {
+        return Err(bad(format!("vox_offset {vox_offset} is invalid")));
+    }
+    let start = vox_offset as usize;
+    let count = n[0]
+        .checked_mul(n[1])
+        .and_then(|v| v.checked_mul(n[2]))
+        .ok_or_else(|| bad("dimensions overflow".into()))?;
+    let end = count
+        .checked_mul(bytes_per)
+        .and_then(|v| v.checked_add(start))
+        .ok_or_else(|| bad("dimensions overflow".into()))?;
+    if b.len() < end {
+        return Err(bad(format!(
+            "truncated: {} data bytes expected at offset {start}, file has {}",
+            end - start,
+            b.len()
+        )));
+    }
+    let raw = &b[start..end];
+    let slope = f32_at(112);
+    let inter = f32_at(116);
+    // NIfTI: scl_slope == 0 means "no scaling".
+    let scaled = slope != 0.0 && slope.is_finite() && (slope != 1.0 || inter != 0.0);
+    let chunks = raw.chunks_exact(bytes_per);
+    let data: Vec<f32> = match (datatype, scaled) {
+        (2, false) => raw.iter().map(|&s| s as f32 / 255.0).collect(),
+        (512, false) => chunks
+            .map(|c| {
+                let a = [c[0], c[1]];
+                let v = if le {
+                    u16::from_le_bytes(a)
+                } else {
+                    u16::from_be_bytes(a)
+                };
+                v as f32 / 65535.0
+            })
+            .collect(),
+        _ => {
+            let values: Vec<f64> = chunks
+                .map(|c| {
+                    let v = decode_sample(datatype, c, le);
+                    if scaled {
+                        slope as f64 * v + inter as f64
+                    } else {
+                        v
+                    }
+                })
+                .collect();
+            min_max_normalise(&values)
+        }
+    };
+    // Axes beyond `dim[0]` do not exist in the file: unit spacing.
+    let sp = |i: usize| {
+        let s = f32_at(76 + 4 * i).abs() as f64;
+        if i <= ndim && s.is_finite() && s > 0.0 {
+            s
+        } else {
+            1.0
+        }
+    };
+    Ok(Volume::from_raw(n[0], n[1], n[2], data).with_spacing([sp(1), sp(2), sp(3)]))
+}
+
+/// Decodes one NIfTI sample of `datatype` from its bytes.
+fn decode_sample(datatype: i16, c: &[u8], le: bool) -> f64 {
+    macro_rules! num {
+        ($t:ty) => {{
+            let a = c.try_into().expect("sample size");
+            (if le {
+                <$t>::from_le_bytes(a)
+            } else {
+                <$t>::from_be_bytes(a)
+            }) as f64
+        }};
+    }
+    match datatype {
+        2 => c[0] as f64,
+        256 => c[0] as i8 as f64,
+        4 => num!(i16),
+        512 => num!(u16),
+        8 => num!(i32),
+        768 => num!(u32),
+        16 => num!(f32),
+        64 => num!(f64),
+        _ => unreachable!("datatype checked by the caller"),
+    }
+}
+
+/// Builds a little-endian single-file NIfTI-1 header (datatype float32).
+fn nifti_header_f32(dims: [usize; 3], spacing: [f64; 3]) -> Vec<u8> {
+    let mut h = vec![0u8; 352];
+    h[0..4].copy_from_slice(&348i32.to_le_bytes());
+    let dim: [i16; 8] = [
+        3,
+        dims[0] as i16,
+        dims[1] as i16,
+        dims[2] as i16,
+        1,
+        1,
+        1,
+        1,
+    ];
+    for (i, d) in dim.iter().enumerate() {
+        h[40 + 2 * i..42 + 2 * i].copy_from_slice(&d.to_le_bytes());
+    }
+    h[70..72].copy_from_slice(&16i16.to_le_bytes());
+    h[72..74].copy_from_slice(&32i16.to_le_bytes());
+    let pixdim: [f32; 8] = [
+        1.0,
+        spacing[0] as f32,
+        spacing[1] as f32,
+        spacing[2] as f32,
+        1.0,
+        1.0,
+        1.0,
+        1.0,
+    ];
+    for (i, p) in pixdim.iter().enumerate() {
+        h[76 + 4 * i..80 + 4 * i].copy_from_slice(&p.to_le_bytes());
+    }
+    h[108..112].copy_from_slice(&352f32.to_le_bytes());
+    h[112..116].copy_from_slice(&1f32.to_le_bytes());
+    h[344..348].copy_from_slice(b"n+1\0");
+    h
+}
+
+/// Saves a volume as a little-endian float32 NIfTI-1 file (gzip-compressed
+/// if the name ends in `.gz`), atomically, with the spacing in `pixdim`.
+/// Intended for inspecting intermediate results in other tools.
+pub fn save_nifti(path: impl AsRef<Path>, volume: &Volume) -> Result<()> {
+    let path = path.as_ref();
+    if volume.dims().iter().any(|&d| d > i16::MAX as usize) {
+        return Err(IoError::invalid(
+            path,
+            "NIfTI-1 dimensions are limited to 32767",
+        ));
+    }
+    let mut bytes = nifti_header_f32(volume.dims(), volume.spacing);
+    bytes.reserve(4 * volume.data.len());
+    for v in &volume.data {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    let gz = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
+    if gz {
+        write_atomic(path, |w| {
+            let mut enc = flate2::write::GzEncoder::new(w, flate2::Compression::default());
+            std::io::Write::write_all(&mut enc, &bytes)?;
+            enc.finish().map(|_| ())
+        })
+    } else {
+        write_bytes_atomic(path, &bytes)
+    }
+}
+
+/// Saves `labels` (`dims = [nx, ny, nz]`, x fastest as in [`Volume`]) as a
+/// multi-page 8-bit grayscale TIFF with one page per z slice, atomically.
+/// Fiji/ImageJ and tifffile open it as a stack.
+pub fn save_labels_tiff(path: impl AsRef<Path>, dims: [usize; 3], labels: &[u8]) -> Result<()> {
+    let path = path.as_ref();
+    let [nx, ny, nz] = dims;
+    if labels.len() != nx * ny * nz {
+        return Err(IoError::invalid(
+            path,
+            format!("{} labels for a {nx}x{ny}x{nz} volume", labels.len()),
+        ));
+    }
+    if nx == 0 || ny == 0 || nz == 0 {
+        return Err(IoError::invalid(path, "empty volume"));
+    }
+    let (w, h) = match (u32::try_from(nx), u32::try_from(ny)) {
+        (Ok(w), Ok(h)) => (w, h),
+        _ => return Err(IoError::invalid(path, "slice too large for TIFF")),
+    };
+    let mut buf = Cursor::new(Vec::new());
+    let enc_err = |e: tiff::TiffError| IoError::write(path, std::io::Error::other(e));
+    {
+        let mut enc = tiff::encoder::TiffEncoder::new(&mut buf).map_err(enc_err)?;
+        for slice in labels.chunks_exact(nx * ny) {
+            enc.write_image::<tiff::encoder::colortype::Gray8>(w, h, slice)
+                .map_err(enc_err)?;
+        }
+    }
+    write_bytes_atomic(path, buf.get_ref())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Builds a NIfTI-1 file in either endianness with arbitrary raw data.
+    fn nifti_bytes(le: bool, dims: &[i16], datatype: i16, bitpix: i16, data: &[u8]) -> Vec<u8> {
+        let mut h = vec![0u8; 352];
+        let put16 = |h: &mut Vec<u8>, o: usize, v: i16| {
+            h[o..o + 2].copy_from_slice(&if le { v.to_le_bytes() } else { v.to_be_bytes() })
+        };
+        let put32f = |h: &mut Vec<u8>, o: usize, v: f32| {
+            h[o..o + 4].copy_from_slice(&if le { v.to_le_bytes() } else { v.to_be_bytes() })
+        };
+        h[0..4].copy_from_slice(&if le {
+            348i32.to_le_bytes()
+        } else {
+            348i32.to_be_bytes()
+        });
+        put16(&mut h, 40, dims.len() as i16);
+        for (i, d) in dims.iter().enumerate() {
+            put16(&mut h, 42 + 2 * i, *d);
+        }
+        put16(&mut h, 70, datatype);
+        put16(&mut h, 72, bitpix);
+        put32f(&mut h, 80, 0.5);
+        put32f(&mut h, 84, 0.25);
+        put32f(&mut h, 88, 2.0);
+        put32f(&mut h, 108, 352.0);
+        h[344..348].copy_from_slice(b"n+1\0");
+        h.extend_from_slice(data);
+        h
+    }
+
+    #[test]
+    fn natural_order() {
+        let mut v = vec!["s10.png", "s2.png", "s1.png", "s02.png", "a.png"];
+        v.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(v, ["a.png", "s1.png", "s2.png", "s02.png", "s10.png"]);
+    }
+
+    #[test]
+    fn trilinear_nodes_and_clamp() {
+        let v = Volume::from_fn(3, 2, 2, |x, y, z| (x + 10 * y + 100 * z) as f32);
+        assert_eq!(v.trilinear(0.5, 0.5, 0.5), 0.0);
+        assert_eq!(v.trilinear(2.5, 1.5, 1.5), 112.0);
+        assert!((v.trilinear(1.0, 1.0, 1.0) - 55.5).abs() < 1e-4);
+        assert_eq!(v.trilinear(-3.0, 9.0, 9.0), 110.0);
+    }
+
+    #[test]
+    fn nifti_both_endiannesses_and_types() {
+        let dir = tempfile::tempdir().unwrap();
+        for le in [true, false] {
+            // int16 with negative values -> min/max normalised.
+            let vals: [i16; 4] = [-100, 0, 100, 300];
+            let data: Vec<u8> = vals
+                .iter()
+                .flat_map(|v| if le { v.to_le_bytes() } else { v.to_be_bytes() })
+                .collect();
+            let p = dir.path().join(format!("i16_{le}.nii"));
+            std::fs::write(&p, nifti_bytes(le, &[2, 2, 1], 4, 16, &data)).unwrap();
+            let v = Volume::load(&p).unwrap();
+            assert_eq!(v.dims(), [2, 2, 1]);
+            assert_eq!(v.data(), &[0.0, 0.25, 0.5, 1.0]);
+            assert_eq!(v.spacing(), [0.5, 0.25, 2.0]);
+
+            // uint16 -> divided by 65535.
+            let data: Vec<u8> = [0u16, 65535]
+                .iter()
+                .flat_map(|v| if le { v.to_le_bytes() } else { v.to_be_bytes() })
+                .collect();
+            let p = dir.path().join(format!("u16_{le}.nii"));
+            std::fs::write(&p, nifti_bytes(le, &[1, 1, 2], 512, 16, &data)).unwrap();
+            let v = Volume::load(&p).unwrap();
+            assert_eq!(v.dims(), [1, 1, 2]);
+            assert_eq!(v.data(), &[0.0, 1.0]);
+            assert_eq!(v.spacing(), [0.5, 0.25, 2.0]);
+        }
+        // uint8 and float64, 4-D with a trailing 1.
+        let p = dir.path().join("u8.nii");
+        std::fs::write(&p, nifti_bytes(true, &[3, 1, 1, 1], 2, 8, &[0, 51, 255])).unwrap();
+        assert_eq!(Volume::load(&p).unwrap().data(), &[0.0, 0.2, 1.0]);
+        let d: Vec<u8> = [1.0f64, 3.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let p = dir.path().join("f64.nii");
+        std::fs::write(&p, nifti_bytes(true, &[2], 64, 64, &d)).unwrap();
+        let v = Volume::load(&p).unwrap();
+        assert_eq!(v.data(), &[0.0, 1.0]);
+        // pixdim of axes beyond dim[0] is ignored.
+        assert_eq!(v.spacing(), [0.5, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn nifti_roundtrip_gz() {
+        let dir = tempfile::tempdir().unwrap();
+        let v = Volume::from_fn(4, 3, 2, |x, y, z| (x + 4 * y + 12 * z) as f32 / 23.0)
+            .with_spacing([0.5, 1.5, 3.0]);
+        for name in ["v.nii", "v.nii.gz"] {
+            let p = dir.path().join(name);
+            save_nifti(&p, &v).unwrap();
+            let w = Volume::load(&p).unwrap();
+            assert_eq!(w.dims(), v.dims());
+            assert_eq!(w.spacing(), v.spacing());
+            for (a, b) in w.data().iter().zip(v.data()) {
+                assert!((a - b).abs() < 1e-6);
+            }
+        }
+        let raw = std::fs::read(dir.path().join("v.nii.gz")).unwrap();
+        let t = dir.path().join("t.nii.gz");
+        std::fs::write(&t, &raw[..raw.len() / 2]).unwrap();
+        assert!(matches!(
+            Volume::load(&t),
+            Err(IoError::MalformedNifti { .. })
+        ));
+    }
+
+    #[test]
+    fn nifti_malformed_headers() {
+        let dir = tempfile::tempdir().unwrap();
+        let good = nifti_bytes(true, &[2, 2, 2], 2, 8, &[0; 8]);
+        let cases: Vec<(&str, Vec<u8>)> = vec![
+            ("short", good[..100].to_vec()),
+            ("truncated_data", good[..good.len() - 1].to_vec()),
+            ("bad_sizeof", {
+                let mut b = good.clone();
+                b[0] = 0;
+                b
+            }),
+            ("bad_magic", {
+                let mut b = good.clone();
+                b[344] = b'x';
+                b
+            }),
+            ("bad_bitpix", nifti_bytes(true, &[2, 2, 2], 2, 16, &[0; 8])),
+            ("bad_type", nifti_bytes(true, &[2, 2, 2], 1, 1, &[0; 8])),
+            ("neg_dim", nifti_bytes(true, &[2, -2, 2], 2, 8, &[0; 8])),
+            ("zero_dim", nifti_bytes(true, &[2, 0, 2], 2, 8, &[0; 8])),
+            ("four_d", nifti_bytes(true, &[1, 1, 1, 2], 2, 8, &[0; 2])),
+            ("bad_offset", {
+                let mut b = good.clone();
+                b[108..112].copy_from_slice(&10f32.to_le_bytes());
+                b
+            }),
+        ];
+        for (name, bytes) in cases {
+            let p = dir.path().join(format!("{name}.nii"));
+            std::fs::write(&p, bytes).unwrap();
+            let e = Volume::load(&p).expect_err(name);
+            assert!(e.to_string().contains(name), "{name}: {e}");
+        }
+    }
+
+    #[test]
+    fn tiff_stack_roundtrip_and_types() {
+        let dir = tempfile::tempdir().unwrap();
+        let labels: Vec<u8> = (0..3 * 2 * 4).map(|i| (i * 10) as u8).collect();
+        let p = dir.path().join("labels.tif");
+        save_labels_tiff(&p, [3, 2, 4], &labels).unwrap();
+        let v = Volume::load(&p).unwrap();
+        assert_eq!(v.dims(), [3, 2, 4]);
+        for (a, b) in v.data().iter().zip(&labels) {
+            assert!((a * 255.0 - *b as f32).abs() < 1e-3);
+        }
+
+        // 16-bit and float32 stacks, as tifffile/Fiji write them.
+        use tiff::encoder::{colortype, TiffEncoder};
+        let p16 = dir.path().join("s16.tif");
+        let mut enc = TiffEncoder::new(File::create(&p16).unwrap()).unwrap();
+        enc.write_image::<colortype::Gray16>(2, 1, &[0, 65535])
+            .unwrap();
+        enc.write_image::<colortype::Gray16>(2, 1, &[65535, 0])
+            .unwrap();
+        drop(enc);
+        assert_eq!(Volume::load(&p16).unwrap().data(), &[0.0, 1.0, 1.0, 0.0]);
+        let pf = dir.path().join("f32.tiff");
+        let mut enc = TiffEncoder::new(File::create(&pf).unwrap()).unwrap();
+        enc.write_image::<colortype::Gray32Float>(2, 1, &[-1.0, 0.0])
+            .unwrap();
+        enc.write_image::<colortype::Gray32Float>(2, 1, &[1.0, 3.0])
+            .unwrap();
+        drop(enc);
+        let v = Volume::load(&pf).unwrap();
+        assert_eq!(v.dims(), [2, 1, 2]);
+        assert_eq!(v.data(), &[0.0, 0.25, 0.5, 1.0]);
+
+        // Mismatched page sizes.
+        let pm = dir.path().join("mismatch.tif");
+        let mut enc = TiffEncoder::new(File::create(&pm).unwrap()).unwrap();
+        enc.write_image::<colortype::Gray8>(2, 1, &[0, 1]).unwrap();
+        enc.write_image::<colortype::Gray8>(1, 2, &[0, 1]).unwrap();
+        drop(enc);
+        assert!(matches!(
+            Volume::load(&pm),
+            Err(IoError::DimensionMismatch { .. })
+        ));
+    }
+
+    #[test]
+    fn tiff_truncated_and_corrupt() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("ok.tif");
+        save_labels_tiff(&p, [8, 8, 3], &[7; 192]).unwrap();
+        let bytes = std::fs::read(&p).unwrap();
+        for cut in [0, 4, 8, 100, bytes.len() - 10] {
+            let t = dir.path().join(format!("cut{cut}.tif"));
+            std::fs::write(&t, &bytes[..cut]).unwrap();
+            let e = Volume::load(&t).unwrap_err();
+            assert!(e.to_string().contains(&format!("cut{cut}.tif")), "{e}");
+        }
+        let g = dir.path().join("garbage.tif");
+        std::fs::write(&g, b"II*\0garbage garbage garbage").unwrap();
+        assert!(Volume::load(&g).is_err());
+    }
+
+    #[test]
+    fn slice_folder_in_natural_order() {
+        let dir = tempfile::tempdir().unwrap();
+        for z in [1usize, 2, 10] {
+            let p = dir.path().join(format!("slice{z}.png"));
+            crate::io::image2::save_gray8_png(&p, 2, 1, &[z as u8, 0]).unwrap();
+        }
+        std::fs::write(dir.path().join("notes.txt"), b"ignored").unwrap();
+        let v = Volume::load(dir.path()).unwrap();
+        assert_eq!(v.dims(), [2, 1, 3]);
+        let firsts: Vec<f32> = (0..3).map(|z| v.get(0, 0, z) * 255.0).collect();
+        assert_eq!(firsts, [1.0, 2.0, 10.0]);
+
+        crate::io::image2::save_gray8_png(dir.path().join("slice11.png"), 1, 1, &[0]).unwrap();
+        assert!(matches!(
+            Volume::load(dir.path()),
+            Err(IoError::DimensionMismatch { .. })
+        ));
+        let empty = tempfile::tempdir().unwrap();
+        assert!(matches!(
+            Volume::load(empty.path()),
+            Err(IoError::Empty { .. })
+        ));
+        assert!(matches!(
+            Volume::load(dir.path().join("x.raw")),
+            Err(IoError::UnknownType { .. })
+        ));
+    }
+
+    /// Cross-check against files written by tifffile and nibabel; see
+    /// `.ci/io_fixtures.py` (run with `DSC_SEG_IO_FIXTURES=DIR ... --ignored`).
+    #[test]
+    #[ignore = "needs fixtures from .ci/io_fixtures.py"]
+    fn external_fixtures() {
+        let dir = PathBuf::from(
+            std::env::var_os("DSC_SEG_IO_FIXTURES").expect("set DSC_SEG_IO_FIXTURES"),
+        );
+        let manifest: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("manifest.json")).unwrap()).unwrap();
+        let manifest = manifest.as_object().unwrap();
+        assert!(!manifest.is_empty());
+        for (name, want) in manifest {
+            let v = Volume::load(dir.join(name)).unwrap_or_else(|e| panic!("{e}"));
+            let dims: Vec<usize> = want["dims"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|d| d.as_u64().unwrap() as usize)
+                .collect();
+            assert_eq!(v.dims().to_vec(), dims, "{name}");
+            let spacing: Vec<f64> = want["spacing"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|d| d.as_f64().unwrap())
+                .collect();
+            for (a, b) in v.spacing().iter().zip(&spacing) {
+                assert!((a - b).abs() < 1e-5, "{name}: spacing {:?}", v.spacing());
+            }
+            let data = want["data"].as_array().unwrap();
+            assert_eq!(data.len(), v.data().len(), "{name}");
+            for (i, (a, b)) in v.data().iter().zip(data).enumerate() {
+                let b = b.as_f64().unwrap();
+                assert!((*a as f64 - b).abs() < 1e-5, "{name}[{i}]: {a} vs {b}");
+            }
+            println!("ok {name}: {:?} spacing {:?}", v.dims(), v.spacing());
+        }
+        let (nx, ny, nz) = (5, 4, 3);
+        let labels: Vec<u8> = (0..nz)
+            .flat_map(|z| {
+                (0..ny).flat_map(move |y| (0..nx).map(move |x| ((x + 2 * y + 3 * z) % 256) as u8))
+            })
+            .collect();
+        save_labels_tiff(dir.join("rust_labels.tif"), [nx, ny, nz], &labels).unwrap();
+        let vol = Volume::from_fn(nx, ny, nz, |x, y, z| (x + 10 * y + 100 * z) as f32 / 1000.0)
+            .with_spacing([0.5, 0.75, 2.0]);
+        save_nifti(dir.join("rust_volume.nii.gz"), &vol).unwrap();
+    }
+}
