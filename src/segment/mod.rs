@@ -1,4 +1,5 @@
 //! Segmentation.
 
+pub mod output3d;
 pub mod region3d;
 pub mod voxel3d;
