@@ -6,7 +6,11 @@
 pub mod complex;
 pub mod dim;
 pub mod dsc;
+pub mod error;
 pub mod io;
 pub mod ops;
 pub mod phantom;
+pub mod pipeline;
 pub mod segment;
+
+pub use error::{Error, Result};

@@ -1,2 +1,227 @@
-//! The `dsc-seg` command line.
-fn main() {}
+//! The `dsc-seg` command line: argument parsing only; the library does the work.
+
+use clap::{Parser, Subcommand, ValueEnum};
+use dsc_seg::pipeline::{run_phantom, run_segment, SegmentJob, Source};
+use dsc_seg::segment::{Init, InitDisk, SegmentParams};
+use dsc_seg::Error;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Multiphase image segmentation with the deformable simplicial complex (DSC).
+#[derive(Parser, Debug)]
+#[command(name = "dsc-seg", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Segment an image (or, without IMAGE, a built-in phantom) into N phases.
+    ///
+    /// Writes labels.png (phase index 0..N-1 ordered by increasing mean),
+    /// overlay.png and overlay.svg, mesh.vtu (cell data `phase`) and
+    /// report.json into --out.
+    Segment(SegmentArgs),
+    /// Write a phantom image with its ground truth (NAME.png, NAME_gt.png, NAME_labels.png).
+    Phantom(PhantomArgs),
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum InitKind {
+    /// Cells labelled by mean: N equal intervals of the dynamic range (bisection for N = 2).
+    Range,
+    /// Disks given with --disk, everything else phase 0.
+    Disks,
+    /// A label PNG given with --init-labels.
+    Labels,
+}
+
+#[derive(Parser, Debug)]
+struct SegmentArgs {
+    /// Input image (PNG, TIFF, JPEG, ...; 8/16 bit, gray or colour). Without it, a built-in phantom is segmented.
+    image: Option<PathBuf>,
+    /// Output directory (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Number of phases N, 2..=64 [default: 2, or the phantom's].
+    #[arg(long, allow_hyphen_values = true)]
+    phases: Option<i64>,
+    /// Average edge length L of the mesh in pixels [default: min(W,H)/64 clamped to 3..8].
+    #[arg(long, allow_hyphen_values = true)]
+    edge_length: Option<f64>,
+    /// Iteration cap.
+    #[arg(long, default_value_t = 500)]
+    max_iterations: usize,
+    /// Initialisation.
+    #[arg(long, value_enum, default_value_t = InitKind::Range)]
+    init: InitKind,
+    /// A disk for --init disks: X,Y,R in pixels, optionally ,PHASE (default 1). Repeatable.
+    #[arg(
+        long = "disk",
+        value_name = "X,Y,R[,PHASE]",
+        allow_hyphen_values = true
+    )]
+    disks: Vec<String>,
+    /// Label PNG for --init labels (same size as the image, values 0..N-1).
+    #[arg(long)]
+    init_labels: Option<PathBuf>,
+    /// Keep every cell's label: only the interfaces move.
+    #[arg(long)]
+    no_label_flips: bool,
+    /// Rigidity weight β of eq. (2).
+    #[arg(long, allow_hyphen_values = true)]
+    rigidity: Option<f64>,
+    /// Built-in phantom to segment when no IMAGE is given.
+    #[arg(long, default_value = "four_phase")]
+    phantom: String,
+    /// Phantom size in pixels (without IMAGE).
+    #[arg(long, default_value_t = 256)]
+    phantom_size: usize,
+    /// Phantom noise standard deviation (without IMAGE).
+    #[arg(long, default_value_t = 0.1)]
+    phantom_noise: f64,
+    /// Phantom noise seed (without IMAGE).
+    #[arg(long, default_value_t = 1)]
+    phantom_seed: u64,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Parser, Debug)]
+struct PhantomArgs {
+    /// two_phase, four_phase, fig2, fig3, fig4, fig5 or fig6.
+    name: String,
+    /// Side in pixels.
+    #[arg(long, default_value_t = 256)]
+    size: usize,
+    /// Standard deviation of the additive Gaussian noise (intensities in [0,1]).
+    #[arg(long, default_value_t = 0.1, allow_hyphen_values = true)]
+    noise: f64,
+    /// Seed of the noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+fn parse_disk(s: &str) -> Result<InitDisk, Error> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| Error::Usage(format!("--disk {s:?}: expected X,Y,R[,PHASE]")))?;
+    if !(3..=4).contains(&v.len()) || (v.len() == 4 && (v[3] < 0.0 || v[3].fract() != 0.0)) {
+        return Err(Error::Usage(format!(
+            "--disk {s:?}: expected X,Y,R[,PHASE]"
+        )));
+    }
+    Ok(InitDisk {
+        x: v[0],
+        y: v[1],
+        r: v[2],
+        phase: v.get(3).map_or(1, |&p| p as u32),
+    })
+}
+
+fn segment(a: SegmentArgs) -> Result<(), Error> {
+    let (source, default_phases) = match &a.image {
+        Some(p) => (Source::File(p.clone()), 2),
+        None => {
+            let kind = dsc_seg::phantom::Phantom2Kind::from_name(&a.phantom)
+                .ok_or_else(|| Error::Usage(format!("unknown phantom {:?}", a.phantom)))?;
+            (
+                Source::Phantom {
+                    name: kind.name().to_string(),
+                    size: a.phantom_size,
+                    noise: a.phantom_noise,
+                    seed: a.phantom_seed,
+                },
+                kind.phases(),
+            )
+        }
+    };
+    let phases = match a.phases {
+        None => default_phases,
+        Some(n) if (2..=64).contains(&n) => n as usize,
+        Some(n) => {
+            return Err(Error::Usage(format!(
+                "--phases {n}: the number of phases must be between 2 and 64"
+            )))
+        }
+    };
+    let mut params = SegmentParams::new(phases);
+    params.edge_length = a.edge_length;
+    params.max_iterations = a.max_iterations;
+    params.label_flips = !a.no_label_flips;
+    if let Some(b) = a.rigidity {
+        params.rigidity = b;
+    }
+    params.init = match a.init {
+        InitKind::Range => Init::Range,
+        InitKind::Disks => {
+            if a.disks.is_empty() {
+                return Err(Error::Usage(
+                    "--init disks needs at least one --disk X,Y,R".into(),
+                ));
+            }
+            Init::Disks(
+                a.disks
+                    .iter()
+                    .map(|s| parse_disk(s))
+                    .collect::<Result<_, _>>()?,
+            )
+        }
+        InitKind::Labels => {
+            if a.init_labels.is_none() {
+                return Err(Error::Usage("--init labels needs --init-labels PNG".into()));
+            }
+            Init::Labels { labels: Vec::new() }
+        }
+    };
+    let job = SegmentJob {
+        source,
+        out: a.out,
+        params,
+        init_labels: a.init_labels,
+        quiet: a.quiet,
+    };
+    let report = run_segment(&job)?;
+    if !a.quiet {
+        eprintln!(
+            "{} after {} iterations ({:.2} s), {} cells; outputs in {}",
+            if report.converged {
+                "converged"
+            } else {
+                "stopped at the iteration cap"
+            },
+            report.iterations,
+            report.times.total,
+            report.cells,
+            job.out.display()
+        );
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Segment(a) => segment(a),
+        Command::Phantom(a) => run_phantom(&a.name, a.size, a.noise, a.seed, &a.out).map(|names| {
+            for n in names {
+                println!("{}", a.out.join(n).display());
+            }
+        }),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let msg = e.to_string().replace('\n', " ");
+            eprintln!("error: {msg}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,356 @@
+//! Whole jobs as the command line runs them: load, validate, segment, write
+//! every output into a directory without ever leaving it half-written.
+//!
+//! Outputs are first written into a hidden staging directory inside the
+//! output directory and only renamed into place once all of them exist, so a
+//! failure leaves the directory as it was.
+
+use crate::dim::D2;
+use crate::error::{Error, Result};
+use crate::io::{save_gray8_png, write_bytes_atomic, write_vtu, CellArray, Cells, Image2, Overlay};
+use crate::phantom::{self, Phantom2Kind};
+use crate::segment::{ImageView, Init, SegmentParams, SegmentReport, Segmentation};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Where the image comes from.
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Source {
+    /// An image file.
+    File(PathBuf),
+    /// A built-in phantom.
+    Phantom {
+        /// Phantom name.
+        name: String,
+        /// Side in pixels.
+        size: usize,
+        /// Noise standard deviation.
+        noise: f64,
+        /// RNG seed.
+        seed: u64,
+    },
+}
+
+/// A segmentation job.
+#[derive(Clone, Debug)]
+pub struct SegmentJob {
+    /// The input.
+    pub source: Source,
+    /// The output directory (created if missing).
+    pub out: PathBuf,
+    /// Segmentation parameters. For `Init::Labels` the labels are loaded from
+    /// [`SegmentJob::init_labels`].
+    pub params: SegmentParams,
+    /// Label PNG for `Init::Labels`.
+    pub init_labels: Option<PathBuf>,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+/// Seconds per stage of a job.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct JobTimes {
+    /// Loading (or generating) the input.
+    pub load: f64,
+    /// The segmentation proper (mesh set-up and evolution).
+    pub segment: f64,
+    /// Rendering and writing the outputs.
+    pub write: f64,
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    tool: &'static str,
+    version: &'static str,
+    source: &'a Source,
+    init_labels: Option<&'a Path>,
+    width: usize,
+    height: usize,
+    params: &'a SegmentParams,
+    dsc: &'a crate::dsc::DscParams,
+    phase_order: Vec<u8>,
+    ordered_means: Vec<Option<f64>>,
+    iterations: usize,
+    converged: bool,
+    final_means: &'a [Option<f64>],
+    final_energy: f64,
+    energy: Vec<f64>,
+    flips: Vec<usize>,
+    vertices: usize,
+    cells: usize,
+    times: JobTimes,
+    truth_dice: Option<f64>,
+    segmentation: &'a SegmentReport,
+}
+
+/// Checks that `dir` can hold our outputs: creates it, then a staging directory in it.
+fn staging(dir: &Path) -> Result<tempfile::TempDir> {
+    let err = |reason: String| Error::OutputDir {
+        path: dir.to_path_buf(),
+        reason,
+    };
+    if dir.exists() && !dir.is_dir() {
+        return Err(err("it exists and is not a directory".into()));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| err(e.to_string()))?;
+    tempfile::Builder::new()
+        .prefix(".dsc-seg-staging-")
+        .tempdir_in(dir)
+        .map_err(|e| err(e.to_string()))
+}
+
+/// Moves every file of the staging directory into `dir`.
+fn publish(stage: tempfile::TempDir, dir: &Path, names: &[&str]) -> Result<()> {
+    for name in names {
+        std::fs::rename(stage.path().join(name), dir.join(name)).map_err(|e| Error::OutputDir {
+            path: dir.to_path_buf(),
+            reason: format!("{name}: {e}"),
+        })?;
+    }
+    Ok(())
+}
+
+/// Loads a label PNG: 8-bit values are the labels.
+fn load_labels(path: &Path, width: usize, height: usize, phases: usize) -> Result<Vec<u8>> {
+    let img = Image2::load(path)?;
+    if img.width() != width || img.height() != height {
+        return Err(Error::Usage(format!(
+            "init labels {} are {}×{} but the image is {}×{}",
+            path.display(),
+            img.width(),
+            img.height(),
+            width,
+            height
+        )));
+    }
+    let labels: Vec<u8> = img
+        .data()
+        .iter()
+        .map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+        .collect();
+    if let Some(&m) = labels.iter().max() {
+        if m as usize >= phases {
+            return Err(Error::Usage(format!(
+                "init labels {} use label {m}, but labels must be below the number of phases ({phases})",
+                path.display()
+            )));
+        }
+    }
+    Ok(labels)
+}
+
+/// Mean Dice over the truth's phases (labels already in the same order).
+pub fn mean_dice(pred: &[u8], truth: &[u8], phases: usize) -> f64 {
+    let mut total = 0.0;
+    for k in 0..phases as u8 {
+        let tp = pred
+            .iter()
+            .zip(truth)
+            .filter(|(a, b)| **a == k && **b == k)
+            .count();
+        let np = pred.iter().filter(|&&a| a == k).count();
+        let nt = truth.iter().filter(|&&a| a == k).count();
+        total += if np + nt == 0 {
+            1.0
+        } else {
+            2.0 * tp as f64 / (np + nt) as f64
+        };
+    }
+    total / phases as f64
+}
+
+/// Runs a segmentation job and writes `labels.png`, `overlay.png`,
+/// `overlay.svg`, `mesh.vtu` and `report.json` into the output directory.
+pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
+    let t_load = Instant::now();
+    let mut params = job.params.clone();
+    let (image, truth) = match &job.source {
+        Source::File(path) => (Image2::load(path)?, None),
+        Source::Phantom {
+            name,
+            size,
+            noise,
+            seed,
+        } => {
+            let kind = Phantom2Kind::from_name(name)
+                .ok_or_else(|| Error::Usage(format!("unknown phantom {name:?}")))?;
+            let ph = kind.generate(*size, *noise, *seed);
+            (
+                Image2::from_raw(ph.width, ph.height, ph.image.clone()),
+                Some(ph),
+            )
+        }
+    };
+    let (w, h) = image.dims();
+    if let Init::Labels { labels } = &mut params.init {
+        let path = job
+            .init_labels
+            .as_ref()
+            .ok_or_else(|| Error::Usage("--init labels needs --init-labels PNG".into()))?;
+        *labels = load_labels(path, w, h, params.phases)?;
+    }
+    let load = t_load.elapsed().as_secs_f64();
+
+    // Validate everything (and the output directory) before any work.
+    let view = ImageView::new_2d(w, h, image.data())
+        .ok_or_else(|| Error::Usage("image buffer does not match its size".into()))?;
+    let t_seg = Instant::now();
+    let mut seg = Segmentation::<D2>::new(view, params.clone())?;
+    let stage = staging(&job.out)?;
+
+    let bar = if job.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(params.max_iterations as u64);
+        b.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        b
+    };
+    let report = seg.run(|r| {
+        bar.set_position(r.iteration as u64);
+        bar.set_message(format!(
+            "E={:.4} flips={} move={:.3}L",
+            r.energy, r.flips, r.max_displacement
+        ));
+    });
+    bar.finish_and_clear();
+    let segment = t_seg.elapsed().as_secs_f64();
+
+    let t_write = Instant::now();
+    let labels = seg.label_image();
+    let order = seg.phase_order();
+    let arrays = seg.complex().to_arrays();
+    let points2: Vec<[f64; 2]> = arrays.points.iter().map(|p| [p[0], p[1]]).collect();
+    let tris: Vec<[u32; 3]> = arrays
+        .connectivity
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .collect();
+    let phase: Vec<u32> = arrays
+        .labels
+        .iter()
+        .map(|&l| order[(l as usize).min(order.len() - 1)] as u32)
+        .collect();
+    let phase_i32: Vec<i32> = phase.iter().map(|&p| p as i32).collect();
+    let dir = stage.path();
+    save_gray8_png(dir.join("labels.png"), w, h, &labels)?;
+    let overlay = Overlay::new(&image, &points2, &tris, &phase);
+    overlay.to_png(dir.join("overlay.png"))?;
+    overlay.to_svg(dir.join("overlay.svg"))?;
+    write_vtu(
+        dir.join("mesh.vtu"),
+        &arrays.points,
+        Cells::Triangles(&tris),
+        &[("phase", CellArray::I32(&phase_i32))],
+    )?;
+    let truth_dice = truth
+        .as_ref()
+        .map(|ph| mean_dice(&labels, &ph.truth, ph.phases));
+    let mut ordered_means = vec![None; params.phases];
+    for (l, &rank) in order.iter().enumerate() {
+        ordered_means[rank as usize] = report.final_means[l];
+    }
+    let times = JobTimes {
+        load,
+        segment,
+        write: t_write.elapsed().as_secs_f64(),
+    };
+    let rep = Report {
+        tool: "dsc-seg",
+        version: env!("CARGO_PKG_VERSION"),
+        source: &job.source,
+        init_labels: job.init_labels.as_deref(),
+        width: w,
+        height: h,
+        params: &params,
+        dsc: seg.dsc_params(),
+        phase_order: order.clone(),
+        ordered_means,
+        iterations: report.iterations,
+        converged: report.converged,
+        final_means: &report.final_means,
+        final_energy: report.final_energy,
+        energy: report.history.iter().map(|r| r.energy).collect(),
+        flips: report.history.iter().map(|r| r.flips).collect(),
+        vertices: report.vertices,
+        cells: report.cells,
+        times,
+        truth_dice,
+        segmentation: &report,
+    };
+    let json = serde_json::to_vec_pretty(&rep).map_err(|e| Error::Usage(e.to_string()))?;
+    write_bytes_atomic(dir.join("report.json"), &json)?;
+    publish(
+        stage,
+        &job.out,
+        &[
+            "labels.png",
+            "overlay.png",
+            "overlay.svg",
+            "mesh.vtu",
+            "report.json",
+        ],
+    )?;
+    Ok(report)
+}
+
+/// Writes phantom `name` (`NAME.png`, ground truth `NAME_gt.png` with phase
+/// `k` as `k·255/(N−1)` like `peers.py`, and `NAME_labels.png` with raw phase
+/// indices) into `out`; fig6 also gets `NAME_init.png` (its two initial
+/// regions as labels, for `--init labels`). Returns the file names written.
+pub fn run_phantom(
+    name: &str,
+    size: usize,
+    noise: f64,
+    seed: u64,
+    out: &Path,
+) -> Result<Vec<String>> {
+    let kind = Phantom2Kind::from_name(name).ok_or_else(|| {
+        let names: Vec<&str> = Phantom2Kind::ALL.iter().map(|k| k.name()).collect();
+        Error::Usage(format!(
+            "unknown phantom {name:?} (one of {})",
+            names.join(", ")
+        ))
+    })?;
+    if !(8..=8192).contains(&size) {
+        return Err(Error::Usage(format!(
+            "phantom size {size} must lie in 8..=8192"
+        )));
+    }
+    if !(noise.is_finite() && noise >= 0.0) {
+        return Err(Error::Usage(format!(
+            "noise {noise} must be a non-negative number"
+        )));
+    }
+    let stage = staging(out)?;
+    let ph = kind.generate(size, noise, seed);
+    let base = kind.name();
+    let dir = stage.path();
+    let mut names = vec![
+        format!("{base}.png"),
+        format!("{base}_gt.png"),
+        format!("{base}_labels.png"),
+    ];
+    save_gray8_png(dir.join(&names[0]), size, size, &ph.image_u8())?;
+    save_gray8_png(dir.join(&names[1]), size, size, &ph.truth_gray())?;
+    save_gray8_png(dir.join(&names[2]), size, size, &ph.truth)?;
+    if kind == Phantom2Kind::Fig6 {
+        names.push(format!("{base}_init.png"));
+        save_gray8_png(
+            dir.join(&names[3]),
+            size,
+            size,
+            &phantom::fig6_initial_labels(size),
+        )?;
+    }
+    let refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    publish(stage, out, &refs)?;
+    Ok(names)
+}

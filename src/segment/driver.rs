@@ -1,0 +1,414 @@
+//! The iteration driver: integrate, flip, compute forces, deform, check convergence.
+
+use super::error::SegmentError;
+use super::flips::Flipper;
+use super::forces::{ForceField, ForceSettings};
+use super::image::ImageView;
+use super::init::initialise;
+use super::integrate::{integrate_cells, CellStats, PhaseStats};
+use super::params::{ForceModel, SegmentParams};
+use super::raster::Raster;
+use crate::complex::{Complex, VertexId};
+use crate::dim::Point;
+use crate::dsc::{Destinations, DscParams};
+use serde::Serialize;
+use std::time::Instant;
+
+/// What one iteration saw and did.
+#[derive(Clone, Debug, Serialize)]
+pub struct IterationRecord {
+    /// Iteration number, from 1.
+    pub iteration: usize,
+    /// Mumford–Shah energy (data + ν·length) of the state the iteration started from.
+    pub energy: f64,
+    /// Data term `Σ (I − m_label)²`.
+    pub data_energy: f64,
+    /// Interface length (area in 3D).
+    pub length: f64,
+    /// Cells that changed label.
+    pub flips: usize,
+    /// Largest requested displacement, in units of L.
+    pub max_displacement: f64,
+    /// Phase means the forces used.
+    pub means: Vec<Option<f64>>,
+    /// Triple junctions with an external force, and crossings without.
+    pub junctions: (usize, usize),
+}
+
+/// Why the run stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// Nothing flipped and nothing moved (beyond the threshold) for long enough.
+    Converged,
+    /// The iteration cap was reached.
+    MaxIterations,
+}
+
+/// Seconds spent in each stage of the evolution.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct StageTimes {
+    /// Building and initialising the mesh.
+    pub setup: f64,
+    /// Integrating the image over the cells.
+    pub integrate: f64,
+    /// Label flips.
+    pub flips: f64,
+    /// Force computation.
+    pub forces: f64,
+    /// DSC deformation (move, improve, resize).
+    pub deform: f64,
+    /// Everything (the segmentation time, excluding file I/O).
+    pub total: f64,
+}
+
+/// The outcome of a run.
+#[derive(Clone, Debug, Serialize)]
+pub struct SegmentReport {
+    /// Edge length L used.
+    pub edge_length: f64,
+    /// Iterations run.
+    pub iterations: usize,
+    /// Whether the run stopped by convergence.
+    pub converged: bool,
+    /// Why it stopped.
+    pub stop_reason: StopReason,
+    /// Final means per mesh label.
+    pub final_means: Vec<Option<f64>>,
+    /// Final energy.
+    pub final_energy: f64,
+    /// Length weight ν used in the energy and flip guard.
+    pub length_weight_abs: f64,
+    /// Per-iteration records.
+    pub history: Vec<IterationRecord>,
+    /// Stage timings.
+    pub times: StageTimes,
+    /// Vertices of the final mesh.
+    pub vertices: usize,
+    /// Cells of the final mesh.
+    pub cells: usize,
+}
+
+/// A segmentation in progress: the complex, the image and all scratch space.
+pub struct Segmentation<'a, K: Raster> {
+    image: ImageView<'a>,
+    params: SegmentParams,
+    dsc: DscParams,
+    complex: Complex<K>,
+    cells: Vec<CellStats>,
+    phases: PhaseStats,
+    forces: ForceField<K>,
+    flipper: Flipper,
+    dest: Destinations<K>,
+    nu: f64,
+    range: (f64, f64),
+    times: StageTimes,
+    history: Vec<IterationRecord>,
+    quiet_iterations: usize,
+}
+
+impl<'a, K: Raster> Segmentation<'a, K> {
+    /// Validates the input, builds the mesh at edge length L and initialises the labels.
+    pub fn new(image: ImageView<'a>, params: SegmentParams) -> Result<Self, SegmentError> {
+        let t0 = Instant::now();
+        if image.is_empty() {
+            return Err(SegmentError::EmptyImage);
+        }
+        let (w, h) = (image.width(), image.height());
+        if image.dims.iter().take(K::N).any(|&d| d < 2) {
+            return Err(SegmentError::ImageTooSmall(w, h));
+        }
+        params.validate(w, h)?;
+        let range = image.range().ok_or(SegmentError::NonFinite)?;
+        if range.1 - range.0 <= 0.0 {
+            return Err(SegmentError::ConstantImage(range.0));
+        }
+        let distinct = image.distinct_values(params.phases);
+        if distinct < params.phases {
+            return Err(SegmentError::TooFewIntensities {
+                distinct,
+                phases: params.phases,
+            });
+        }
+        let l = params.resolved_edge_length(w, h);
+        let dsc = DscParams::new::<K>(l);
+        let mut complex = K::box_complex(&image, l)?;
+        let mut cells = Vec::new();
+        integrate_cells(&complex, &image, &mut cells);
+        let hints = initialise(&mut complex, &image, &params, &cells, range)?;
+        let mut phases = PhaseStats::new(params.phases);
+        phases.mean = hints;
+        phases.update(&complex, &cells);
+        if phases.present() < 1 {
+            return Err(SegmentError::Init("no phase covers any pixel".into()));
+        }
+        let dest = Destinations::new(&complex);
+        let mut s = Segmentation {
+            image,
+            params,
+            dsc,
+            complex,
+            cells,
+            phases,
+            forces: ForceField::new(),
+            flipper: Flipper::new(),
+            dest,
+            nu: 0.0,
+            range,
+            times: StageTimes::default(),
+            history: Vec::new(),
+            quiet_iterations: 0,
+        };
+        s.nu = s.length_weight();
+        s.times.setup = t0.elapsed().as_secs_f64();
+        Ok(s)
+    }
+
+    /// ν = `length_weight` × (smallest gap between known means) (intensities
+    /// in `[0, 1]`), or × the dynamic range over N if fewer than two means are known.
+    fn length_weight(&self) -> f64 {
+        let mut m: Vec<f64> = self.phases.mean.iter().flatten().copied().collect();
+        m.sort_by(f64::total_cmp);
+        let gap = m
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .filter(|&g| g > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        let gap = if gap.is_finite() {
+            gap
+        } else {
+            (self.range.1 - self.range.0) / self.params.phases as f64
+        };
+        self.params.length_weight * gap
+    }
+
+    /// The complex in its current state.
+    pub fn complex(&self) -> &Complex<K> {
+        &self.complex
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &SegmentParams {
+        &self.params
+    }
+
+    /// The DSC thresholds in use.
+    pub fn dsc_params(&self) -> &DscParams {
+        &self.dsc
+    }
+
+    /// Current phase statistics.
+    pub fn phases(&self) -> &PhaseStats {
+        &self.phases
+    }
+
+    /// The records so far.
+    pub fn history(&self) -> &[IterationRecord] {
+        &self.history
+    }
+
+    fn data_energy(&self) -> f64 {
+        self.complex
+            .cell_ids()
+            .map(|c| {
+                let m = self.phases.mean_of(self.complex.label(c)).unwrap_or(0.0);
+                self.cells[c.index()].sse(m)
+            })
+            .sum()
+    }
+
+    fn integrate(&mut self) {
+        let t = Instant::now();
+        integrate_cells(&self.complex, &self.image, &mut self.cells);
+        self.phases.update(&self.complex, &self.cells);
+        self.times.integrate += t.elapsed().as_secs_f64();
+    }
+
+    /// One iteration; returns its record.
+    pub fn step(&mut self) -> IterationRecord {
+        let iteration = self.history.len() + 1;
+        self.integrate();
+        let data_energy = self.data_energy();
+
+        let mut flips = 0;
+        if self.params.label_flips {
+            let t = Instant::now();
+            flips = self.flipper.flip(
+                &mut self.complex,
+                &self.image,
+                &self.cells,
+                &self.phases,
+                self.nu,
+                self.params.flip_guard,
+            );
+            if self.params.flip_guard {
+                flips += self.flipper.component_flips(
+                    &mut self.complex,
+                    &self.cells,
+                    &self.phases,
+                    self.nu,
+                );
+            }
+            if flips > 0 {
+                self.phases.update(&self.complex, &self.cells);
+            }
+            self.times.flips += t.elapsed().as_secs_f64();
+        }
+
+        let t = Instant::now();
+        let l = self.dsc.edge_length;
+        let settings = ForceSettings {
+            model: self.params.force,
+            rigidity: self.params.rigidity,
+            elasticity: self.params.elasticity,
+            edge_length: l,
+            spacing: self.params.sample_spacing,
+            equal_means: 1e-6 * (self.range.1 - self.range.0),
+        };
+        self.forces
+            .compute(&self.complex, &self.image, &self.phases, &settings);
+        let length = self.forces.interface_measure;
+        // Step: the largest displacement is step_fraction·L once a force reaches
+        // the reference magnitude (1 for eq. 6: a pixel exactly at a mean);
+        // weaker fields move proportionally less, so the evolution can settle.
+        let reference = match self.params.force {
+            ForceModel::Normalised => 1.0,
+            ForceModel::ChanVese => {
+                let (a, b) = (
+                    self.phases.mean[0].unwrap_or(0.0),
+                    self.phases.mean[1].unwrap_or(0.0),
+                );
+                ((a - b) * (a - b)).max(1e-12)
+            }
+        };
+        let fmax = self
+            .forces
+            .force
+            .iter()
+            .map(|f| f.length())
+            .fold(0.0, f64::max);
+        let scale = self.params.step_fraction * l / fmax.max(reference);
+        self.dest.clear();
+        let mut max_disp: f64 = 0.0;
+        for v in self.complex.vertex_ids().collect::<Vec<VertexId>>() {
+            let f = self.forces.force[v.index()];
+            if f == K::Point::zero() {
+                continue;
+            }
+            let p = self.complex.position(v);
+            let target = self.complex.constrain(v, p + f * scale);
+            let d = (target - p).length();
+            if d > 0.0 {
+                max_disp = max_disp.max(d);
+                self.dest.set(v, target);
+            }
+        }
+        self.times.forces += t.elapsed().as_secs_f64();
+
+        let t = Instant::now();
+        if !self.dest.is_empty() {
+            self.complex.deform(&self.dest, &self.dsc);
+            self.dest = Destinations::new(&self.complex);
+        }
+        self.times.deform += t.elapsed().as_secs_f64();
+
+        let rec = IterationRecord {
+            iteration,
+            energy: data_energy + self.nu * length,
+            data_energy,
+            length,
+            flips,
+            max_displacement: max_disp / l,
+            means: self.phases.mean.clone(),
+            junctions: self.forces.junctions,
+        };
+        if flips == 0 && rec.max_displacement < self.params.converge_displacement {
+            self.quiet_iterations += 1;
+        } else {
+            self.quiet_iterations = 0;
+        }
+        self.history.push(rec.clone());
+        rec
+    }
+
+    /// Whether the stopping rule is met.
+    pub fn converged(&self) -> bool {
+        self.quiet_iterations >= self.params.converge_iterations
+    }
+
+    /// Iterates until convergence or the cap; `progress` sees every record.
+    pub fn run(&mut self, mut progress: impl FnMut(&IterationRecord)) -> SegmentReport {
+        let t0 = Instant::now();
+        while self.history.len() < self.params.max_iterations && !self.converged() {
+            let rec = self.step();
+            progress(&rec);
+        }
+        self.integrate();
+        let final_energy = self.data_energy() + self.nu * self.interface_measure();
+        self.times.total = self.times.setup + t0.elapsed().as_secs_f64();
+        let converged = self.converged();
+        SegmentReport {
+            edge_length: self.dsc.edge_length,
+            iterations: self.history.len(),
+            converged,
+            stop_reason: if converged {
+                StopReason::Converged
+            } else {
+                StopReason::MaxIterations
+            },
+            final_means: self.phases.mean.clone(),
+            final_energy,
+            length_weight_abs: self.nu,
+            history: self.history.clone(),
+            times: self.times,
+            vertices: self.complex.vertex_count(),
+            cells: self.complex.cell_count(),
+        }
+    }
+
+    /// Total interface measure of the current mesh.
+    pub fn interface_measure(&self) -> f64 {
+        let mut total = 0.0;
+        for c in self.complex.cell_ids() {
+            for (i, nb) in self.complex.neighbours(c).iter().enumerate() {
+                if let Some(nb) = *nb {
+                    if nb.index() > c.index() && self.complex.label(nb) != self.complex.label(c) {
+                        let pts = self.complex.cell_points(c);
+                        total += K::facet_measure(&pts[..K::NV], i);
+                    }
+                }
+            }
+        }
+        total
+    }
+
+    /// Mesh label → output phase index, phases ordered by increasing mean
+    /// (phases without a mean last, in label order).
+    pub fn phase_order(&self) -> Vec<u8> {
+        let n = self.params.phases;
+        let mut idx: Vec<usize> = (0..n).collect();
+        idx.sort_by(|&a, &b| {
+            let ma = self.phases.mean[a].unwrap_or(f64::INFINITY);
+            let mb = self.phases.mean[b].unwrap_or(f64::INFINITY);
+            ma.total_cmp(&mb).then(a.cmp(&b))
+        });
+        let mut map = vec![0u8; n];
+        for (rank, &l) in idx.iter().enumerate() {
+            map[l] = rank as u8;
+        }
+        map
+    }
+
+    /// The final labelling rasterised per pixel (pixel-centre rule), values
+    /// `0..N` ordered by increasing phase mean.
+    pub fn label_image(&self) -> Vec<u8> {
+        let map = self.phase_order();
+        let mut out = vec![0u8; self.image.len()];
+        for c in self.complex.cell_ids() {
+            let l = map[(self.complex.label(c) as usize).min(map.len() - 1)];
+            let pts = self.complex.cell_points(c);
+            K::cell_pixels(&self.image, &pts[..K::NV], &mut |p| out[p] = l);
+        }
+        out
+    }
+}

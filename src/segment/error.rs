@@ -1,0 +1,47 @@
+//! What can go wrong in a segmentation run.
+
+use crate::complex::BuildError;
+use thiserror::Error;
+
+/// Bad input or an impossible configuration (never a panic, never a NaN).
+#[derive(Debug, Error)]
+pub enum SegmentError {
+    /// The image has no pixels.
+    #[error("the image is empty")]
+    EmptyImage,
+    /// The image is too small to hold a mesh.
+    #[error("the image is {0}×{1} pixels; at least 2×2 is needed")]
+    ImageTooSmall(usize, usize),
+    /// A sample is NaN or infinite.
+    #[error("the image contains a non-finite value")]
+    NonFinite,
+    /// All pixels have the same value: there is nothing to separate.
+    #[error("the image is constant ({0}); there is nothing to segment")]
+    ConstantImage(f64),
+    /// Fewer distinct intensities than phases.
+    #[error("the image has only {distinct} distinct intensities, fewer than the {phases} phases asked for")]
+    TooFewIntensities {
+        /// Distinct values found.
+        distinct: usize,
+        /// Phases asked for.
+        phases: usize,
+    },
+    /// The number of phases is out of range.
+    #[error("the number of phases must be between 2 and 64, not {0}")]
+    Phases(usize),
+    /// A bad edge length.
+    #[error("edge length {0}: {1}")]
+    EdgeLength(f64, String),
+    /// Another parameter is out of range.
+    #[error("parameter {0} = {1} is out of range")]
+    Param(&'static str, f64),
+    /// Eq. (5) is defined for two phases only.
+    #[error("the Chan–Vese force (eq. 5) needs exactly 2 phases, not {0}")]
+    ChanVeseNeedsTwoPhases(usize),
+    /// A bad initialisation.
+    #[error("initialisation: {0}")]
+    Init(String),
+    /// The mesh could not be built.
+    #[error("mesh: {0}")]
+    Build(#[from] BuildError),
+}

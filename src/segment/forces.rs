@@ -1,0 +1,443 @@
+//! Forces on interface vertices: the region forces of eqs. (5)–(7) integrated
+//! along interface facets, and the rigidity (and optional elasticity) term of
+//! eq. (2) traced along each phase boundary.
+//!
+//! For every interface facet between phases `i` (the cell) and `j` (its
+//! neighbour) the image is sampled about every pixel; each sample's force
+//! `f(I)·N_ij` (`N_ij` the facet's unit normal pointing from `i` into `j`) is
+//! distributed to the facet's corners with the hat (barycentric) weights, and
+//! each vertex's total is divided by its share of the facet measure, so the
+//! result is a force per unit length/area: the hat-weighted average of `f`.
+//!
+//! Junctions ([`VertexKind::Junction`]) get the external force of eq. (7) only
+//! when every phase around them occurs once (a triple junction); a crossing
+//! where a phase occurs twice gets none and is resolved by its neighbours.
+
+use super::image::ImageView;
+use super::integrate::PhaseStats;
+use super::params::ForceModel;
+use super::raster::Raster;
+use crate::complex::{CellId, Complex, Label, VertexId, VertexKind};
+use crate::dim::{Dim, Point};
+
+/// Most phases tracked around one vertex; further ones are ignored.
+const MAXP: usize = 6;
+
+/// What a vertex is for the forces.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ForceKind {
+    /// Not on the interface: no force.
+    #[default]
+    Off,
+    /// Between exactly two phases: eq. (6) (or eq. (5)).
+    Interface,
+    /// A junction where every surrounding region is a distinct phase: eq. (7).
+    TripleJunction,
+    /// A junction where some phase occurs twice: no external force.
+    Crossing,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Acc<P> {
+    kind: ForceKind,
+    np: usize,
+    phases: [Label; MAXP],
+    /// Summed outward normals of each phase (junctions).
+    normal: [P; MAXP],
+    /// Eq. (7) weights of each phase, integrated with the hat weights.
+    weight: [f64; MAXP],
+    /// Sum of boundary neighbours' positions (then their umbrellas) per phase.
+    nsum: [P; MAXP],
+    ncnt: [f64; MAXP],
+    usum: [P; MAXP],
+    ext: P,
+    share: f64,
+    umbrella: P,
+}
+
+impl<P: Point> Acc<P> {
+    fn reset(&mut self) {
+        self.kind = ForceKind::Off;
+        self.np = 0;
+        self.normal = [P::zero(); MAXP];
+        self.weight = [0.0; MAXP];
+        self.nsum = [P::zero(); MAXP];
+        self.ncnt = [0.0; MAXP];
+        self.usum = [P::zero(); MAXP];
+        self.ext = P::zero();
+        self.share = 0.0;
+        self.umbrella = P::zero();
+    }
+    fn slot(&mut self, l: Label) -> Option<usize> {
+        if let Some(s) = self.phases[..self.np].iter().position(|&p| p == l) {
+            return Some(s);
+        }
+        if self.np < MAXP {
+            self.phases[self.np] = l;
+            self.np += 1;
+            Some(self.np - 1)
+        } else {
+            None
+        }
+    }
+}
+
+/// One interface facet, kept between the passes.
+#[derive(Clone, Copy, Debug)]
+struct Facet {
+    corners: [VertexId; 3],
+    a: Label,
+    b: Label,
+}
+
+/// Weights of the internal forces and the force model.
+#[derive(Clone, Copy, Debug)]
+pub struct ForceSettings {
+    /// Region force model.
+    pub model: ForceModel,
+    /// Rigidity weight β.
+    pub rigidity: f64,
+    /// Elasticity weight α.
+    pub elasticity: f64,
+    /// Edge length L (makes the internal terms dimensionless).
+    pub edge_length: f64,
+    /// Sample spacing along facets (pixels).
+    pub spacing: f64,
+    /// Mean gaps below this count as equal means: no region force across them.
+    pub equal_means: f64,
+}
+
+/// Per-vertex forces, with all scratch space kept between iterations.
+#[derive(Clone, Debug, Default)]
+pub struct ForceField<K: Dim> {
+    acc: Vec<Acc<K::Point>>,
+    /// Total force per vertex id (zero off the interface).
+    pub force: Vec<K::Point>,
+    facets: Vec<Facet>,
+    star: Vec<CellId>,
+    piece: Vec<usize>,
+    stack: Vec<usize>,
+    labels: Vec<Label>,
+    /// Total measure of the interface (length in 2D), from the last computation.
+    pub interface_measure: f64,
+    /// Number of triple junctions and crossings seen in the last computation.
+    pub junctions: (usize, usize),
+}
+
+impl<K: Raster> ForceField<K> {
+    /// Empty scratch space.
+    pub fn new() -> Self {
+        ForceField {
+            acc: Vec::new(),
+            force: Vec::new(),
+            facets: Vec::new(),
+            star: Vec::new(),
+            piece: Vec::new(),
+            stack: Vec::new(),
+            labels: Vec::new(),
+            interface_measure: 0.0,
+            junctions: (0, 0),
+        }
+    }
+
+    /// The force kind of `v` from the last computation.
+    pub fn kind(&self, v: VertexId) -> ForceKind {
+        self.acc.get(v.index()).map_or(ForceKind::Off, |a| a.kind)
+    }
+
+    /// Pieces and distinct labels around `v` with the reusable buffers.
+    fn classify(&mut self, complex: &Complex<K>, v: VertexId) -> ForceKind {
+        let class = complex.class(v);
+        match class.kind {
+            VertexKind::Interior => return ForceKind::Off,
+            VertexKind::Interface => return ForceKind::Interface,
+            VertexKind::Junction => {}
+        }
+        complex.star_into(v, &mut self.star);
+        self.piece.clear();
+        self.piece.resize(self.star.len(), usize::MAX);
+        let mut pieces = 0;
+        for start in 0..self.star.len() {
+            if self.piece[start] != usize::MAX {
+                continue;
+            }
+            self.piece[start] = pieces;
+            self.stack.clear();
+            self.stack.push(start);
+            while let Some(i) = self.stack.pop() {
+                let c = self.star[i];
+                let label = complex.label(c);
+                for (local, nb) in complex.neighbours(c).iter().enumerate() {
+                    let Some(nb) = *nb else { continue };
+                    if complex.cell(c)[local] == v || complex.label(nb) != label {
+                        continue;
+                    }
+                    if let Some(j) = self.star.iter().position(|&s| s == nb) {
+                        if self.piece[j] == usize::MAX {
+                            self.piece[j] = pieces;
+                            self.stack.push(j);
+                        }
+                    }
+                }
+            }
+            pieces += 1;
+        }
+        self.labels.clear();
+        self.labels
+            .extend(self.star.iter().map(|&c| complex.label(c)));
+        self.labels.sort_unstable();
+        self.labels.dedup();
+        if pieces == self.labels.len() && pieces <= MAXP {
+            ForceKind::TripleJunction
+        } else {
+            ForceKind::Crossing
+        }
+    }
+
+    /// Computes [`ForceField::force`] for every vertex of `complex`.
+    pub fn compute(
+        &mut self,
+        complex: &Complex<K>,
+        image: &ImageView<'_>,
+        phases: &PhaseStats,
+        s: &ForceSettings,
+    ) {
+        let nv = complex.vertex_capacity();
+        let empty = Acc {
+            kind: ForceKind::Off,
+            np: 0,
+            phases: [0; MAXP],
+            normal: [K::Point::zero(); MAXP],
+            weight: [0.0; MAXP],
+            nsum: [K::Point::zero(); MAXP],
+            ncnt: [0.0; MAXP],
+            usum: [K::Point::zero(); MAXP],
+            ext: K::Point::zero(),
+            share: 0.0,
+            umbrella: K::Point::zero(),
+        };
+        self.acc.resize(nv, empty);
+        self.force.clear();
+        self.force.resize(nv, K::Point::zero());
+        self.facets.clear();
+        self.interface_measure = 0.0;
+        self.junctions = (0, 0);
+        for i in 0..nv {
+            self.acc[i].reset();
+            let v = VertexId(i as u32);
+            if !complex.is_vertex_alive(v) {
+                continue;
+            }
+            let kind = self.classify(complex, v);
+            self.acc[i].kind = kind;
+            match kind {
+                ForceKind::TripleJunction => {
+                    self.junctions.0 += 1;
+                    // slots in increasing label order, for eq. (7)
+                    for k in 0..self.labels.len() {
+                        let l = self.labels[k];
+                        self.acc[i].slot(l);
+                    }
+                }
+                ForceKind::Crossing => self.junctions.1 += 1,
+                _ => {}
+            }
+        }
+
+        // Pass 1: region forces and boundary neighbours, facet by facet.
+        let nf = K::N; // corners per facet
+        for c in complex.cell_ids() {
+            let a = complex.label(c);
+            for (i, nb) in complex.neighbours(c).iter().enumerate() {
+                let Some(nb) = *nb else { continue };
+                let b = complex.label(nb);
+                if a == b || nb.index() < c.index() {
+                    continue;
+                }
+                let pts = complex.cell_points(c);
+                let normal = K::facet_normal(&pts[..K::NV], i);
+                let meas = K::facet_measure(&pts[..K::NV], i);
+                self.interface_measure += meas;
+                let verts = complex.cell(c);
+                let mut corners = [VertexId(0); 3];
+                let mut cpts = [K::Point::zero(); 3];
+                let mut n = 0;
+                for k in 0..K::NV {
+                    if k != i {
+                        corners[n] = verts[k];
+                        cpts[n] = pts[k];
+                        n += 1;
+                    }
+                }
+                self.facets.push(Facet { corners, a, b });
+                // neighbours along the boundaries of a and b
+                for p in 0..nf {
+                    for q in 0..nf {
+                        if p == q {
+                            continue;
+                        }
+                        let acc = &mut self.acc[corners[p].index()];
+                        for l in [a, b] {
+                            if let Some(sl) = acc.slot(l) {
+                                acc.nsum[sl] += cpts[q];
+                                acc.ncnt[sl] += 1.0;
+                            }
+                        }
+                    }
+                }
+                // outward normals per phase at junctions
+                for corner in corners.iter().take(nf) {
+                    let acc = &mut self.acc[corner.index()];
+                    if acc.kind == ForceKind::TripleJunction {
+                        if let Some(sa) = acc.slot(a) {
+                            acc.normal[sa] += normal * meas;
+                        }
+                        if let Some(sb) = acc.slot(b) {
+                            acc.normal[sb] -= normal * meas;
+                        }
+                    }
+                }
+                let (Some(ma), Some(mb)) = (phases.mean_of(a), phases.mean_of(b)) else {
+                    continue;
+                };
+                let gap = ma - mb;
+                if gap.abs() < s.equal_means {
+                    continue; // equal means: eq. (6) undefined, no region force
+                }
+                let acc = &mut self.acc;
+                K::facet_samples(&cpts[..nf], s.spacing, &mut |p, w, ds| {
+                    let intensity = K::sample(image, p);
+                    let f = match s.model {
+                        ForceModel::Normalised => (2.0 * intensity - ma - mb) / gap,
+                        ForceModel::ChanVese => (2.0 * intensity - ma - mb) * gap,
+                    };
+                    for k in 0..nf {
+                        let wk = w[k] * ds;
+                        let ac = &mut acc[corners[k].index()];
+                        match ac.kind {
+                            ForceKind::Interface => {
+                                ac.ext += normal * (f * wk);
+                                ac.share += wk;
+                            }
+                            ForceKind::TripleJunction => {
+                                ac.share += wk;
+                                junction_weights(ac, phases, intensity, wk);
+                            }
+                            _ => {}
+                        }
+                    }
+                });
+            }
+        }
+
+        // Umbrellas: sector-averaged Laplacian along the phase boundaries.
+        for i in 0..nv {
+            let acc = &mut self.acc[i];
+            if acc.kind == ForceKind::Off {
+                continue;
+            }
+            let v = VertexId(i as u32);
+            if complex.class(v).on_boundary() {
+                continue; // the border is a free end for the bending term
+            }
+            let x = complex.position(v);
+            let mut u = K::Point::zero();
+            let mut m = 0.0;
+            for sl in 0..acc.np {
+                if acc.ncnt[sl] > 0.0 {
+                    u += acc.nsum[sl] * (1.0 / acc.ncnt[sl]) - x;
+                    m += 1.0;
+                }
+            }
+            if m > 0.0 {
+                acc.umbrella = u * (1.0 / m);
+            }
+        }
+        // Pass 2: neighbours' umbrellas along the same boundaries.
+        for f in &self.facets {
+            for p in 0..nf {
+                for q in 0..nf {
+                    if p == q {
+                        continue;
+                    }
+                    let uq = self.acc[f.corners[q].index()].umbrella;
+                    let acc = &mut self.acc[f.corners[p].index()];
+                    for l in [f.a, f.b] {
+                        if let Some(sl) = acc.slot(l) {
+                            acc.usum[sl] += uq;
+                        }
+                    }
+                }
+            }
+        }
+
+        let inv_l = 1.0 / s.edge_length;
+        for i in 0..nv {
+            let acc = &self.acc[i];
+            let mut f = K::Point::zero();
+            match acc.kind {
+                ForceKind::Off => continue,
+                ForceKind::Interface if acc.share > 0.0 => f += acc.ext * (1.0 / acc.share),
+                ForceKind::TripleJunction if acc.share > 0.0 => {
+                    for sl in 0..acc.np {
+                        let n = acc.normal[sl];
+                        let len = n.length();
+                        if len > 0.0 && acc.weight[sl] > 0.0 {
+                            f += n * (acc.weight[sl] / (acc.share * len));
+                        }
+                    }
+                }
+                _ => {}
+            }
+            let v = VertexId(i as u32);
+            if !complex.class(v).on_boundary() {
+                // bending: −Δ(umbrella), sector-averaged like the umbrella itself
+                let mut lap = K::Point::zero();
+                let mut m = 0.0;
+                for sl in 0..acc.np {
+                    if acc.ncnt[sl] > 0.0 {
+                        lap += acc.usum[sl] * (1.0 / acc.ncnt[sl]) - acc.umbrella;
+                        m += 1.0;
+                    }
+                }
+                if m > 0.0 {
+                    f -= lap * (s.rigidity * inv_l / m);
+                }
+                f += acc.umbrella * (s.elasticity * inv_l);
+            }
+            if f.is_finite() {
+                self.force[i] = f;
+            }
+        }
+    }
+}
+
+/// Eq. (7): of the phases around the junction, the two whose means bracket
+/// `intensity` share the weight linearly in `intensity`; below (above) every
+/// mean the lowest (highest) phase takes it all.
+fn junction_weights<P: Point>(acc: &mut Acc<P>, phases: &PhaseStats, intensity: f64, wk: f64) {
+    let mut below: Option<(usize, f64)> = None;
+    let mut above: Option<(usize, f64)> = None;
+    for sl in 0..acc.np {
+        let Some(m) = phases.mean_of(acc.phases[sl]) else {
+            continue;
+        };
+        if m <= intensity {
+            if below.map_or(true, |(_, bm)| m > bm) {
+                below = Some((sl, m));
+            }
+        } else if above.map_or(true, |(_, am)| m < am) {
+            above = Some((sl, m));
+        }
+    }
+    match (below, above) {
+        (Some((lo, mlo)), Some((hi, mhi))) => {
+            let t = (intensity - mlo) / (mhi - mlo);
+            acc.weight[lo] += (1.0 - t) * wk;
+            acc.weight[hi] += t * wk;
+        }
+        (Some((lo, _)), None) => acc.weight[lo] += wk,
+        (None, Some((hi, _))) => acc.weight[hi] += wk,
+        (None, None) => {}
+    }
+}

@@ -1,0 +1,79 @@
+//! A borrowed view of a scalar image or volume, the input of the segmentation.
+
+/// A row-major scalar image (2D) or volume (3D): `x` fastest, then `y`, then `z`.
+///
+/// Pixel `(x, y)` covers `[x, x+1) × [y, y+1)` of the complex's domain and has
+/// its centre at `(x + 0.5, y + 0.5)`; `y` is the row index. A 2D image has
+/// `dims[2] == 1`.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageView<'a> {
+    /// Extent in pixels/voxels along each axis.
+    pub dims: [usize; 3],
+    /// The samples, `dims[0] · dims[1] · dims[2]` of them.
+    pub data: &'a [f32],
+}
+
+impl<'a> ImageView<'a> {
+    /// A 2D view; `None` when `data.len() != width · height`.
+    pub fn new_2d(width: usize, height: usize, data: &'a [f32]) -> Option<Self> {
+        (width.checked_mul(height) == Some(data.len())).then_some(ImageView {
+            dims: [width, height, 1],
+            data,
+        })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> usize {
+        self.dims[0]
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> usize {
+        self.dims[1]
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.data.len()
+    }
+
+    /// Whether the image has no samples.
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+
+    /// The value of pixel `(x, y)` of a 2D image.
+    #[inline]
+    pub fn at(&self, x: usize, y: usize) -> f32 {
+        self.data[y * self.dims[0] + x]
+    }
+
+    /// Smallest and largest sample (`None` if empty or any sample is not finite).
+    pub fn range(&self) -> Option<(f64, f64)> {
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for &v in self.data {
+            if !v.is_finite() {
+                return None;
+            }
+            lo = lo.min(v as f64);
+            hi = hi.max(v as f64);
+        }
+        (lo <= hi).then_some((lo, hi))
+    }
+
+    /// Number of distinct sample values, counting at most `cap`.
+    pub fn distinct_values(&self, cap: usize) -> usize {
+        let mut seen: Vec<u32> = Vec::new();
+        for &v in self.data {
+            let b = v.to_bits();
+            if !seen.contains(&b) {
+                seen.push(b);
+                if seen.len() >= cap {
+                    break;
+                }
+            }
+        }
+        seen.len()
+    }
+}

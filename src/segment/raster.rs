@@ -1,0 +1,144 @@
+//! The dimension-specific part of the segmentation: which pixels a cell
+//! covers, where to sample a facet, and how to interpolate the image.
+//!
+//! Everything else in [`crate::segment`] is written once against [`Raster`].
+//! A 3D implementation needs tetrahedra over voxels (the same half-open
+//! centre rule, slice by slice and row by row), quadrature points on triangles
+//! and trilinear sampling.
+
+use super::image::ImageView;
+use crate::complex::{BuildError, Complex};
+use crate::dim::{Dim, D2};
+use crate::dsc::Connectivity;
+use nalgebra::Vector2;
+
+/// Image access for cells and facets of dimension `Self`.
+///
+/// Contract for [`Raster::cell_pixels`]: over a complex that tiles the image
+/// domain, every pixel/voxel is visited by exactly one cell (centre rule with
+/// half-open boundaries computed identically by the two cells sharing a facet).
+pub trait Raster: Connectivity {
+    /// Calls `visit(index)` for the linear index of every pixel/voxel whose
+    /// centre lies in the cell with the given `NV` corners.
+    fn cell_pixels(image: &ImageView<'_>, corners: &[Self::Point], visit: &mut impl FnMut(usize));
+
+    /// Samples the facet with the given `N` corners about every `spacing`
+    /// units: calls `visit(point, weights, measure)` where `weights` are the
+    /// barycentric (hat) weights of the point over the facet corners and
+    /// `measure` the part of the facet's length/area the sample stands for.
+    fn facet_samples(
+        corners: &[Self::Point],
+        spacing: f64,
+        visit: &mut impl FnMut(Self::Point, &[f64], f64),
+    );
+
+    /// The image interpolated (bi-/trilinearly between sample centres, clamped
+    /// at the border) at a point of the domain.
+    fn sample(image: &ImageView<'_>, p: Self::Point) -> f64;
+
+    /// The centre of the pixel/voxel with the given linear index.
+    fn pixel_centre(image: &ImageView<'_>, index: usize) -> Self::Point;
+
+    /// A complex filling the image domain `[0, dims]` at edge length `l`,
+    /// every cell labelled 0.
+    fn box_complex(image: &ImageView<'_>, l: f64) -> Result<Complex<Self>, BuildError>;
+}
+
+/// The x where the edge `a`–`b` crosses the line `y = yc`, computed from the
+/// edge's endpoints in a canonical order so that the two triangles sharing the
+/// edge get bit-identical results.
+#[inline]
+fn edge_x(a: Vector2<f64>, b: Vector2<f64>, yc: f64) -> f64 {
+    let (p, q) = if (a.y, a.x) <= (b.y, b.x) {
+        (a, b)
+    } else {
+        (b, a)
+    };
+    p.x + (yc - p.y) * (q.x - p.x) / (q.y - p.y)
+}
+
+impl Raster for D2 {
+    /// Pixel-centre rule by scanlines: row `j` (centre `yc = j + 0.5`) meets
+    /// the triangle if `ymin <= yc < ymax`; an edge is active on the row when
+    /// `ylo <= yc < yhi` (exactly two edges are then); the pixels with centre
+    /// in `[xl, xr)` belong to the triangle. Shared edges give identical `x`,
+    /// so each pixel is counted exactly once over a tiling.
+    fn cell_pixels(image: &ImageView<'_>, c: &[Vector2<f64>], visit: &mut impl FnMut(usize)) {
+        let (w, h) = (image.dims[0] as i64, image.dims[1] as i64);
+        let ymin = c[0].y.min(c[1].y).min(c[2].y);
+        let ymax = c[0].y.max(c[1].y).max(c[2].y);
+        let j0 = ((ymin - 0.5).ceil() as i64).max(0);
+        let j1 = ((ymax - 0.5).ceil() as i64).min(h); // exclusive
+        for j in j0..j1 {
+            let yc = j as f64 + 0.5;
+            let mut xs = [0.0f64; 2];
+            let mut n = 0;
+            for e in 0..3 {
+                let a = c[e];
+                let b = c[(e + 1) % 3];
+                let (lo, hi) = if a.y <= b.y { (a.y, b.y) } else { (b.y, a.y) };
+                if lo <= yc && yc < hi && n < 2 {
+                    xs[n] = edge_x(a, b, yc);
+                    n += 1;
+                }
+            }
+            if n < 2 {
+                continue;
+            }
+            let (xl, xr) = if xs[0] <= xs[1] {
+                (xs[0], xs[1])
+            } else {
+                (xs[1], xs[0])
+            };
+            let i0 = ((xl - 0.5).ceil() as i64).max(0);
+            let i1 = ((xr - 0.5).ceil() as i64).min(w);
+            let row = j * w;
+            for i in i0..i1 {
+                visit((row + i) as usize);
+            }
+        }
+    }
+
+    fn facet_samples(
+        c: &[Vector2<f64>],
+        spacing: f64,
+        visit: &mut impl FnMut(Vector2<f64>, &[f64], f64),
+    ) {
+        let d = c[1] - c[0];
+        let len = d.norm();
+        let n = ((len / spacing).ceil() as usize).max(1);
+        let ds = len / n as f64;
+        for k in 0..n {
+            let t = (k as f64 + 0.5) / n as f64;
+            visit(c[0] + d * t, &[1.0 - t, t], ds);
+        }
+    }
+
+    fn sample(image: &ImageView<'_>, p: Vector2<f64>) -> f64 {
+        let (w, h) = (image.dims[0], image.dims[1]);
+        let x = (p.x - 0.5).clamp(0.0, (w - 1) as f64);
+        let y = (p.y - 0.5).clamp(0.0, (h - 1) as f64);
+        let x0 = (x.floor() as usize).min(w.saturating_sub(2));
+        let y0 = (y.floor() as usize).min(h.saturating_sub(2));
+        let x1 = (x0 + 1).min(w - 1);
+        let y1 = (y0 + 1).min(h - 1);
+        let fx = x - x0 as f64;
+        let fy = y - y0 as f64;
+        let v = |i: usize, j: usize| image.data[j * w + i] as f64;
+        let top = v(x0, y0) * (1.0 - fx) + v(x1, y0) * fx;
+        let bot = v(x0, y1) * (1.0 - fx) + v(x1, y1) * fx;
+        top * (1.0 - fy) + bot * fy
+    }
+
+    fn pixel_centre(image: &ImageView<'_>, index: usize) -> Vector2<f64> {
+        let w = image.dims[0];
+        Vector2::new((index % w) as f64 + 0.5, (index / w) as f64 + 0.5)
+    }
+
+    fn box_complex(image: &ImageView<'_>, l: f64) -> Result<Complex<D2>, BuildError> {
+        Complex::rectangle(image.dims[0] as f64, image.dims[1] as f64, l)
+    }
+}
+
+/// The dimension's point type, for generic code that names it.
+pub type PointOf<K> = <K as Dim>::Point;
