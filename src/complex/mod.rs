@@ -19,7 +19,6 @@ pub use cavity::Rejection;
 pub use class::{VertexClass, VertexKind};
 pub use export::MeshArrays;
 pub use ids::{CellId, Label, VertexId};
-pub use junction::PhaseContact;
 pub use validate::Finding;
 
 use crate::dim::{Dim, Point, D2, D3};

@@ -150,6 +150,9 @@ impl<K: Raster> ForceField<K> {
         let class = complex.class(v);
         match class.kind {
             VertexKind::Interior => return ForceKind::Off,
+            // 3D: a two-piece star can still sit on an edge with more than two
+            // interface triangles (two sheets of a phase touching): a crossing.
+            VertexKind::Interface if complex.has_junction_edge(v) => return ForceKind::Crossing,
             VertexKind::Interface => return ForceKind::Interface,
             VertexKind::Junction => {}
         }

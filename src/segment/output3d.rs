@@ -1,13 +1,13 @@
-//! Results of a 3D segmentation as files: the label volume (`labels.tif`,
-//! value = phase index with phases ordered by increasing mean), the
-//! tetrahedral mesh (`mesh.vtu`, cell data `phase`) and the interface surface
-//! (`interface.vtp`, cell data `phase` and `phase_other`: the phases on the
-//! two sides of each triangle, `phase` the lower one, the triangle oriented
-//! with its normal pointing from `phase` to `phase_other`).
+//! A 3D complex as VTK files: the tetrahedral mesh (`mesh.vtu`, cell data
+//! `phase`) and the interface surface (`interface.vtp`, cell data `phase` and
+//! `phase_other`: the phases on the two sides of each triangle, `phase` the
+//! lower mesh label, the triangle oriented with its normal pointing from
+//! `phase` to `phase_other`). Phases are written through an `order` map (mesh
+//! label → output index, e.g. the driver's phases by increasing mean).
 
 use crate::complex::{Complex, Label};
 use crate::dim::{Dim, D3};
-use crate::io::{save_labels_tiff, write_vtp, write_vtu, CellArray, Cells, IoError};
+use crate::io::{write_vtp, write_vtu, CellArray, Cells, IoError};
 use std::path::Path;
 
 /// The interface triangles of a 3D complex as plain arrays.
@@ -23,25 +23,10 @@ pub struct InterfaceSurface {
     pub phase_other: Vec<Label>,
 }
 
-/// The rank of each phase when phases are sorted by increasing mean (NaN
-/// means, i.e. empty phases, last); `rank[label]` is the value written for `label`.
-pub fn phase_ranks(means: &[f64]) -> Vec<u8> {
-    let mut order: Vec<usize> = (0..means.len()).collect();
-    order.sort_by(|&a, &b| {
-        let key = |i: usize| {
-            if means[i].is_nan() {
-                f64::INFINITY
-            } else {
-                means[i]
-            }
-        };
-        key(a).total_cmp(&key(b)).then(a.cmp(&b))
-    });
-    let mut rank = vec![0u8; means.len()];
-    for (r, &label) in order.iter().enumerate() {
-        rank[label] = r.min(u8::MAX as usize) as u8;
-    }
-    rank
+fn ordered(order: &[u8], label: Label) -> i32 {
+    order
+        .get(label as usize)
+        .map_or(label as i32, |&o| o as i32)
 }
 
 impl Complex<D3> {
@@ -84,19 +69,11 @@ impl Complex<D3> {
         out
     }
 
-    /// The phase of every voxel of a `dims` grid under the voxel-centre rule,
-    /// mapped through `rank` (see [`phase_ranks`]); x fastest.
-    pub fn voxel_labels(&self, dims: [usize; 3], rank: &[u8]) -> Vec<u8> {
-        self.voxel_owners(dims)
-            .iter()
-            .map(|o| o.map_or(0, |c| rank[self.label(c) as usize]))
-            .collect()
-    }
-
-    /// Writes the tetrahedral mesh as `.vtu` with the cell data `phase`.
-    pub fn write_mesh_vtu(&self, path: impl AsRef<Path>) -> Result<(), IoError> {
+    /// Writes the tetrahedral mesh as `.vtu` with the cell data `phase`
+    /// (`order[label]`; labels beyond `order` are written as they are).
+    pub fn write_mesh_vtu(&self, path: impl AsRef<Path>, order: &[u8]) -> Result<(), IoError> {
         let arrays = self.to_arrays();
-        let phase: Vec<i32> = arrays.labels.iter().map(|&l| l as i32).collect();
+        let phase: Vec<i32> = arrays.labels.iter().map(|&l| ordered(order, l)).collect();
         write_vtu(
             path,
             &arrays.points,
@@ -106,11 +83,12 @@ impl Complex<D3> {
     }
 
     /// Writes the interface surface as `.vtp` with the cell data `phase` and
-    /// `phase_other` (see [`InterfaceSurface`]).
-    pub fn write_interface_vtp(&self, path: impl AsRef<Path>) -> Result<(), IoError> {
+    /// `phase_other` (see [`InterfaceSurface`]);
+    /// (`order[label]` as for [`write_mesh_vtu`](Self::write_mesh_vtu)).
+    pub fn write_interface_vtp(&self, path: impl AsRef<Path>, order: &[u8]) -> Result<(), IoError> {
         let s = self.interface_surface();
-        let phase: Vec<i32> = s.phase.iter().map(|&l| l as i32).collect();
-        let other: Vec<i32> = s.phase_other.iter().map(|&l| l as i32).collect();
+        let phase: Vec<i32> = s.phase.iter().map(|&l| ordered(order, l)).collect();
+        let other: Vec<i32> = s.phase_other.iter().map(|&l| ordered(order, l)).collect();
         write_vtp(
             path,
             &s.points,
@@ -120,18 +98,6 @@ impl Complex<D3> {
                 ("phase_other", CellArray::I32(&other)),
             ],
         )
-    }
-
-    /// Writes the voxel labels of a `dims` grid as a multi-page 8-bit TIFF,
-    /// phases numbered by increasing mean (`means` indexed by label).
-    pub fn write_labels_tiff(
-        &self,
-        path: impl AsRef<Path>,
-        dims: [usize; 3],
-        means: &[f64],
-    ) -> Result<(), IoError> {
-        let labels = self.voxel_labels(dims, &phase_ranks(means));
-        save_labels_tiff(path, dims, &labels)
     }
 }
 
@@ -144,12 +110,6 @@ mod tests {
         let mut c = Complex::cuboid([12.0, 12.0, 12.0], 2.0).unwrap();
         c.label_by(|p| ((p - Vector3::new(6.0, 6.0, 6.0)).norm() < 3.5) as Label);
         c
-    }
-
-    #[test]
-    fn ranks_follow_increasing_means() {
-        assert_eq!(phase_ranks(&[0.8, 0.1, 0.5]), vec![2, 0, 1]);
-        assert_eq!(phase_ranks(&[f64::NAN, 0.1]), vec![1, 0]);
     }
 
     #[test]
@@ -181,27 +141,15 @@ mod tests {
     fn files_are_written() {
         let c = ball();
         let dir = tempfile::tempdir().unwrap();
-        c.write_mesh_vtu(dir.path().join("mesh.vtu")).unwrap();
-        c.write_interface_vtp(dir.path().join("interface.vtp"))
+        c.write_mesh_vtu(dir.path().join("mesh.vtu"), &[1, 0])
             .unwrap();
-        c.write_labels_tiff(dir.path().join("labels.tif"), [12, 12, 12], &[0.2, 0.9])
+        c.write_interface_vtp(dir.path().join("interface.vtp"), &[1, 0])
             .unwrap();
-        for name in ["mesh.vtu", "interface.vtp", "labels.tif"] {
-            let len = std::fs::metadata(dir.path().join(name)).unwrap().len();
-            assert!(len > 100, "{name}: {len} bytes");
+        for name in ["mesh.vtu", "interface.vtp"] {
+            let text = std::fs::read_to_string(dir.path().join(name)).unwrap();
+            assert!(text.contains("Name=\"phase\""), "{name}");
         }
-        let text = std::fs::read_to_string(dir.path().join("mesh.vtu")).unwrap();
-        assert!(text.contains("Name=\"phase\""));
-        // Voxel counts per phase follow the phase volumes (a larger ball, where
-        // the staircase error is small relative to the volume).
-        let mut big = Complex::cuboid([32.0, 32.0, 32.0], 2.0).unwrap();
-        big.label_by(|p| ((p - Vector3::new(16.0, 16.0, 16.0)).norm() < 10.0) as Label);
-        let labels = big.voxel_labels([32, 32, 32], &[0, 1]);
-        let inside = labels.iter().filter(|&&l| l == 1).count() as f64;
-        let volume = big.phase_measures()[1];
-        assert!(
-            (inside - volume).abs() < 0.05 * volume,
-            "{inside} voxels vs volume {volume}"
-        );
+        let text = std::fs::read_to_string(dir.path().join("interface.vtp")).unwrap();
+        assert!(text.contains("Name=\"phase_other\""));
     }
 }
