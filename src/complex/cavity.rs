@@ -49,6 +49,41 @@ pub(crate) fn facet_key(cell: &[VertexId], opposite: usize) -> FacetKey {
     key
 }
 
+/// `key` with `removed` replaced by `kept`, or `None` if it then repeats a vertex.
+fn rename_key(key: FacetKey, removed: VertexId, kept: VertexId) -> Option<FacetKey> {
+    if key.contains(&kept.0) {
+        return None;
+    }
+    let mut renamed = key.map(|v| if v == removed.0 { kept.0 } else { v });
+    renamed.sort_unstable();
+    Some(renamed)
+}
+
+/// Cavity-boundary facets that coincide after a rename: each pair is glued
+/// (returned as `(key, a, b)`) and taken out of the list; three or more, or two
+/// domain-boundary facets, cannot be glued.
+type Glued = Vec<(FacetKey, Option<CellId>, Option<CellId>)>;
+fn glue_coinciding(
+    outside: &mut Vec<(FacetKey, Option<CellId>, bool)>,
+) -> Result<Glued, Rejection> {
+    let mut glued = Vec::new();
+    let mut k = 0;
+    while k + 1 < outside.len() {
+        if outside[k].0 != outside[k + 1].0 {
+            k += 1;
+            continue;
+        }
+        let (key, a, _) = outside[k];
+        let b = outside[k + 1].1;
+        if (k + 2 < outside.len() && outside[k + 2].0 == key) || (a.is_none() && b.is_none()) {
+            return Err(Rejection::NonManifold);
+        }
+        glued.push((key, a, b));
+        outside.drain(k..k + 2);
+    }
+    Ok(glued)
+}
+
 impl<K: Dim> Complex<K> {
     /// Adds an unattached vertex (it becomes live when a new cell uses it).
     pub(crate) fn add_vertex(&mut self, p: K::Point) -> VertexId {
@@ -81,6 +116,22 @@ impl<K: Dim> Complex<K> {
         new: &[(K::Cell, Label)],
         created: &mut Vec<CellId>,
     ) -> Result<(), Rejection> {
+        self.replace_cells_merging(old, new, None, created)
+    }
+
+    /// [`replace_cells`](Self::replace_cells) for a collapse of `merge = (removed, kept)`:
+    /// facets of the cavity boundary that contain the removed vertex (only
+    /// domain-boundary facets can) are renamed to the kept vertex; one that then
+    /// has a repeated vertex has degenerated and vanishes, and two that then
+    /// coincide are glued to each other (a facet outside the cavity may thereby
+    /// become a domain-boundary facet).
+    pub(crate) fn replace_cells_merging(
+        &mut self,
+        old: &[CellId],
+        new: &[(K::Cell, Label)],
+        merge: Option<(VertexId, VertexId)>,
+        created: &mut Vec<CellId>,
+    ) -> Result<(), Rejection> {
         if old.iter().any(|&c| !self.is_alive(c)) {
             return Err(Rejection::Stale);
         }
@@ -94,11 +145,20 @@ impl<K: Dim> Complex<K> {
             for i in 0..K::NV {
                 let nb = self.neighbours(c)[i];
                 if nb.is_none_or(|n| !old.contains(&n)) {
-                    outside.push((facet_key(self.cell(c), i), nb, false));
+                    let key = facet_key(self.cell(c), i);
+                    match merge {
+                        Some((removed, kept)) if key.contains(&removed.0) => {
+                            if let Some(renamed) = rename_key(key, removed, kept) {
+                                outside.push((renamed, nb, false));
+                            }
+                        }
+                        _ => outside.push((key, nb, false)),
+                    }
                 }
             }
         }
         outside.sort_unstable_by_key(|e| e.0);
+        let glued = glue_coinciding(&mut outside)?;
         // Facets of the new cells: (key, new cell index, local index).
         let mut facets: Vec<(FacetKey, usize, usize)> = Vec::with_capacity(new.len() * K::NV);
         for (j, (cell, _)) in new.iter().enumerate() {
@@ -157,6 +217,16 @@ impl<K: Dim> Complex<K> {
                     .find(|&l| facet_key(self.cell(nb), l) == key)
                     .expect("outside cell shares the facet");
                 self.neighbours[nb.index()].as_mut()[local] = Some(CellId(base + j as u32));
+            }
+        }
+        for (key, a, b) in glued {
+            for (cell, other) in [(a, b), (b, a)] {
+                if let Some(cell) = cell {
+                    let local = (0..K::NV)
+                        .find(|&l| facet_key(self.cell(cell), l) == key)
+                        .expect("glued cell has the facet");
+                    self.neighbours[cell.index()].as_mut()[local] = other;
+                }
             }
         }
         for (j, (cell, label)) in new.iter().enumerate() {

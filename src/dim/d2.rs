@@ -10,6 +10,19 @@ fn coord(p: &Vector2<f64>) -> robust::Coord<f64> {
     robust::Coord { x: p.x, y: p.y }
 }
 
+const SIN_60: f64 = 0.866_025_403_784_438_6;
+
+impl D2 {
+    /// The quality of a triangle whose smallest angle is `degrees` (≤ 60).
+    pub fn quality_of_min_angle(degrees: f64) -> f64 {
+        degrees.to_radians().sin() / SIN_60
+    }
+    /// The smallest angle, in degrees, of a triangle of quality `q`.
+    pub fn min_angle_of_quality(q: f64) -> f64 {
+        (q * SIN_60).clamp(0.0, 1.0).asin().to_degrees()
+    }
+}
+
 impl Dim for D2 {
     const N: usize = 2;
     type Point = Vector2<f64>;
@@ -30,22 +43,23 @@ impl Dim for D2 {
         let b = p[2] - p[0];
         0.5 * (a.x * b.y - a.y * b.x)
     }
-    /// Smallest angle over 60°: the max-min-angle criterion of the 2D DSC.
+    /// sin(smallest angle) / sin(60°): monotone in the smallest angle (the
+    /// max-min-angle criterion of the 2D DSC), 1 for the equilateral triangle,
+    /// and cheap: the smallest angle faces the shortest edge, so its sine is
+    /// 2·area / (product of the two longer edges); no trigonometry at all.
     fn quality(p: &[Self::Point]) -> f64 {
-        if Self::orient(p) <= 0.0 {
+        let area = Self::signed_measure(p);
+        if area <= 0.0 {
             return 0.0;
         }
-        // The smallest angle faces the shortest edge and is at most 60°, so
-        // sin θ = 2·area / (product of the two longer edges) determines it
-        // with one asin instead of three atan2.
-        let mut l2 = [
+        let l2 = [
             (p[1] - p[2]).norm_squared(),
             (p[2] - p[0]).norm_squared(),
             (p[0] - p[1]).norm_squared(),
         ];
-        l2.sort_unstable_by(f64::total_cmp);
-        let sin = (2.0 * Self::signed_measure(p) / (l2[1] * l2[2]).sqrt()).clamp(0.0, 1.0);
-        (sin.asin() / (std::f64::consts::PI / 3.0)).clamp(0.0, 1.0)
+        let shortest = l2[0].min(l2[1]).min(l2[2]);
+        let sin = 2.0 * area * (shortest / (l2[0] * l2[1] * l2[2])).sqrt();
+        (sin / SIN_60).clamp(0.0, 1.0)
     }
     fn regular_measure(l: f64) -> f64 {
         3f64.sqrt() / 4.0 * l * l
@@ -82,15 +96,19 @@ mod tests {
     }
 
     #[test]
-    fn quality_is_the_smallest_angle_over_sixty_degrees() {
+    fn quality_measures_the_smallest_angle() {
         let tri = [
             Vector2::new(0.0, 0.0),
             Vector2::new(4.0, 0.0),
             Vector2::new(1.0, 0.5),
         ];
-        let by_angles = angles(&tri).iter().copied().fold(f64::INFINITY, f64::min)
-            / (std::f64::consts::PI / 3.0);
-        assert!((D2::quality(&tri) - by_angles).abs() < 1e-12);
+        let smallest = angles(&tri)
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+            .to_degrees();
+        assert!((D2::min_angle_of_quality(D2::quality(&tri)) - smallest).abs() < 1e-9);
+        assert!((D2::quality_of_min_angle(smallest) - D2::quality(&tri)).abs() < 1e-12);
         let equilateral = [
             Vector2::new(0.0, 0.0),
             Vector2::new(1.0, 0.0),

@@ -5,7 +5,8 @@ use super::resize::ResizeStats;
 use super::{Connectivity, DscParams};
 use crate::complex::{Complex, VertexId};
 use crate::dim::Dim;
-use crate::ops::MoveOutcome;
+use crate::dim::Point;
+use crate::ops::{CollapseMode, MoveOutcome};
 use serde::Serialize;
 
 /// Destinations for some vertices, indexed by vertex id.
@@ -55,6 +56,8 @@ pub struct DeformReport {
     pub arrived: usize,
     /// Vertices that stopped short (blocked, collapsed away or out of rounds); not an error.
     pub stopped_short: usize,
+    /// Vertices headed for the domain border that were merged onto it (see `snap_to_border`).
+    pub snapped: usize,
     /// Improvement counts, summed over rounds and the final resize.
     pub improve: ImproveStats,
     /// Resize counts.
@@ -95,14 +98,81 @@ impl<K: Connectivity> Complex<K> {
                     MoveOutcome::Partial(_) | MoveOutcome::Blocked => true,
                 }
             });
+            report.snapped += self.snap_to_border(&mut pending, destinations, params);
             add(&mut report.improve, self.improve_near(&movers, params));
         }
-        report.stopped_short = requested - report.arrived;
+        report.stopped_short = requested - report.arrived - report.snapped;
         report.resize = self.resize(params, &mut touched);
         touched.retain(|&v| self.is_vertex_alive(v));
         add(&mut report.improve, self.improve_near(&touched, params));
         self.compact();
         report
+    }
+}
+
+impl<K: Connectivity> Complex<K> {
+    /// A vertex heading for a box face is blocked by the thin cells between it
+    /// and the face: it may only go half-way to them, so it would approach the
+    /// border forever (the paper's Fig. 5 artifact). Once it is closer than
+    /// `min_length·L` to the face, merge it with the nearest interior vertex on
+    /// that face (an unsafe collapse placed on the face), so the interface
+    /// reaches the border and then slides along it. Returns how many snapped.
+    fn snap_to_border(
+        &mut self,
+        pending: &mut Vec<VertexId>,
+        destinations: &Destinations<K>,
+        params: &DscParams,
+    ) -> usize {
+        let reach = params.min_length * params.edge_length;
+        let (lo, hi) = self.domain();
+        let mut star = Vec::new();
+        let mut snapped = 0;
+        pending.retain(|&v| {
+            if !self.is_vertex_alive(v) {
+                return false;
+            }
+            let target = self.constrain(
+                v,
+                destinations
+                    .get(v)
+                    .expect("pending vertices have destinations"),
+            );
+            let p = self.position(v);
+            let here = self.class(v).boundary;
+            let mut face = None;
+            for axis in 0..K::N {
+                for (bit, bound) in [(2 * axis, lo[axis]), (2 * axis + 1, hi[axis])] {
+                    if target[axis] == bound
+                        && here & (1 << bit) == 0
+                        && (p[axis] - bound).abs() < reach
+                    {
+                        face = Some(1u8 << bit);
+                    }
+                }
+            }
+            let Some(face) = face else { return true };
+            self.star_into(v, &mut star);
+            let mut best: Option<(f64, VertexId)> = None;
+            for &c in &star {
+                for &w in self.cell(c) {
+                    let class = self.class(w);
+                    if w != v && class.boundary & face != 0 && !class.on_interface() {
+                        let d = (self.position(w) - p).length();
+                        if best.is_none_or(|(bd, _)| d < bd) {
+                            best = Some((d, w));
+                        }
+                    }
+                }
+            }
+            let Some((_, w)) = best else { return true };
+            let snap =
+                self.collapse_edge(v, w, CollapseMode::Unsafe, params.degenerate_quality, 1.0);
+            if snap.is_ok() {
+                snapped += 1;
+            }
+            snap.is_err()
+        });
+        snapped
     }
 }
 

@@ -171,6 +171,7 @@ impl<K: Connectivity> Complex<K> {
         marks.resize(self.cell_capacity(), false);
         let mut star = Vec::new();
         let mut ring: Vec<VertexId> = Vec::new();
+        let mut seen = vec![false; self.vertex_capacity()];
         for &v in seeds {
             if !self.is_vertex_alive(v) {
                 continue;
@@ -178,12 +179,13 @@ impl<K: Connectivity> Complex<K> {
             self.star_into(v, &mut star);
             for &c in &star {
                 for &w in self.cell(c) {
-                    ring.push(w);
+                    if !seen[w.index()] {
+                        seen[w.index()] = true;
+                        ring.push(w);
+                    }
                 }
             }
         }
-        ring.sort_unstable();
-        ring.dedup();
         for &w in &ring {
             self.star_into(w, &mut star);
             for &c in &star {

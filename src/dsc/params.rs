@@ -1,6 +1,7 @@
 //! The DSC's thresholds, all derived from the one user parameter: the average edge length.
 
-use crate::dim::Dim;
+use crate::dim::{Dim, D2};
+
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -24,9 +25,9 @@ pub struct ParamError {
 pub struct DscParams {
     /// Average edge length `L`, the one user parameter (pixels/voxels).
     pub edge_length: f64,
-    /// Cells below this quality are degenerate and removed (2D: 2° of 60°; 3D: 0.02).
+    /// Cells below this quality are degenerate and removed (2D: a 2° smallest angle; 3D: 0.02).
     pub degenerate_quality: f64,
-    /// A collapse is safe only if the cells it creates reach this quality (2D: 10° of 60°; 3D: 0.3).
+    /// A collapse is safe only if the cells it creates reach this quality (2D: a 10° smallest angle; 3D: 0.3).
     pub min_quality: f64,
     /// Cells below this quality are improved by flips (3D: 2-3 flips and edge
     /// removal, 0.3); 2D flips every non-Delaunay edge and ignores it.
@@ -57,7 +58,11 @@ impl DscParams {
     pub fn new<K: Dim>(edge_length: f64) -> Self {
         // 3D: interface faces are flat when adjacent normals satisfy |n1·n2| >= 0.995.
         let (degenerate_quality, min_quality, straight_angle_deg) = if K::N == 2 {
-            (2.0 / 60.0, 10.0 / 60.0, 10.0)
+            (
+                D2::quality_of_min_angle(2.0),
+                D2::quality_of_min_angle(10.0),
+                10.0,
+            )
         } else {
             (0.02, 0.3, 0.995f64.acos().to_degrees())
         };
@@ -177,7 +182,7 @@ impl DscParams {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dim::{D2, D3};
+    use crate::dim::D3;
 
     #[test]
     fn defaults_are_valid_in_both_dimensions() {

@@ -76,7 +76,7 @@ impl<K: Dim> Complex<K> {
             }
         };
         let (free_u, free_v) = (free(u), free(v));
-        let mut best: Option<(f64, Candidate<K::Point>)> = None;
+        let mut candidates: Vec<(f64, Candidate<K::Point>)> = Vec::with_capacity(6);
         for at in [pu, pv, (pu + pv) * 0.5] {
             let on_faces = self.boundary_mask(&at);
             if on_faces & cu.boundary != cu.boundary || on_faces & cv.boundary != cv.boundary {
@@ -89,19 +89,23 @@ impl<K: Dim> Complex<K> {
                 [(u, v, &star_u, &star_v), (v, u, &star_v, &star_u)]
             {
                 let q = self.collapse_quality(keep, remove, at, star_keep, star_remove);
-                if q > 0.0 && best.as_ref().is_none_or(|(bq, _)| q > *bq) {
-                    best = Some((q, Candidate { keep, remove, at }));
+                if q >= min_quality && q > 0.0 {
+                    candidates.push((q, Candidate { keep, remove, at }));
                 }
             }
         }
-        let Some((quality, cand)) = best else {
-            return Err(Rejection::NoCandidate);
-        };
-        if quality < min_quality {
-            return Err(Rejection::LowQuality);
+        // Best quality first; a candidate the cavity primitive rejects (e.g. a
+        // domain-boundary facet that cannot be kept) falls through to the next.
+        candidates.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut outcome = Err(Rejection::NoCandidate);
+        for (_, cand) in candidates {
+            let star_remove = if cand.keep == u { &star_v } else { &star_u };
+            match self.apply_collapse(cand, star_remove) {
+                Ok(()) => return Ok(cand.keep),
+                Err(e) => outcome = Err(e),
+            }
         }
-        self.apply_collapse(cand, if cand.keep == u { &star_v } else { &star_u })?;
-        Ok(cand.keep)
+        outcome
     }
 
     /// Worst quality of the cells around `keep` after merging `remove` into it at `at`
@@ -155,7 +159,12 @@ impl<K: Dim> Complex<K> {
         let old_pos = self.position(cand.keep);
         self.set_position(cand.keep, cand.at);
         let mut created = Vec::new();
-        let result = self.replace_cells(star_remove, &new, &mut created);
+        let result = self.replace_cells_merging(
+            star_remove,
+            &new,
+            Some((cand.remove, cand.keep)),
+            &mut created,
+        );
         if result.is_err() {
             self.set_position(cand.keep, old_pos);
         } else {

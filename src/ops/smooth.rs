@@ -3,15 +3,25 @@
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::{Dim, Point};
 
+/// A star whose worst cell is at least this good is left alone: smoothing would
+/// barely improve it, and skipping it keeps improvement cheap where the mesh is fine.
+const GOOD_ENOUGH: f64 = 0.8;
+
 impl<K: Dim> Complex<K> {
     /// Moves a non-interface vertex towards the mean of its neighbours (sliding
-    /// along the domain boundary if it lies on it). Accepted only if no cell
-    /// inverts and the worst quality of its star does not drop. Returns whether it moved.
+    /// along the domain boundary if it lies on it), unless its star is already
+    /// good. Accepted only if no cell inverts and the worst quality of its star
+    /// does not drop. Returns whether it moved.
     pub fn smooth_vertex(&mut self, v: VertexId, star: &mut Vec<CellId>) -> bool {
         if !self.is_vertex_alive(v) || self.class(v).on_interface() {
             return false;
         }
         self.star_into(v, star);
+        let p = self.position(v);
+        let before = self.min_quality_at(star, v, p);
+        if before >= GOOD_ENOUGH {
+            return false;
+        }
         let mut sum = K::Point::zero();
         let mut n = 0usize;
         for &c in star.iter() {
@@ -25,12 +35,10 @@ impl<K: Dim> Complex<K> {
         if n == 0 {
             return false;
         }
-        let p = self.position(v);
         let target = self.constrain(v, sum * (1.0 / n as f64));
         if (target - p).length() <= 1e-12 {
             return false;
         }
-        let before = self.min_quality_at(star, v, p);
         if !self.star_positive_at(star, v, target) || self.min_quality_at(star, v, target) < before
         {
             return false;

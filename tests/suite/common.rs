@@ -49,7 +49,9 @@ pub fn interface_field<K: Dim>(
 
 /// Minimum angles (degrees) of every triangle.
 pub fn min_angles(c: &Complex2) -> Vec<f64> {
-    c.cell_ids().map(|t| c.quality(t) * 60.0).collect()
+    c.cell_ids()
+        .map(|t| D2::min_angle_of_quality(c.quality(t)))
+        .collect()
 }
 
 /// Quality requirement of the foundation issue: no angle below 2°, and at

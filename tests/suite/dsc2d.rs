@@ -174,17 +174,32 @@ fn interfaces_slide_along_the_image_border() {
     let l = 4.0;
     let mut c = disks(100.0, l, &[(20.0, 50.0, 12.0)]);
     let p = params(l);
-    for _ in 0..15 {
-        let d = interface_field(&c, |_, _| Vector2::new(-0.4 * l, 0.0));
+    let area0 = c.phase_measures()[1];
+    // Push the left half of the disk into the border (the right half stays).
+    for _ in 0..8 {
+        let d = interface_field(&c, |_, q| {
+            Vector2::new(if q.x < 20.0 { -0.4 * l } else { 0.0 }, 0.0)
+        });
         c.deform(&d, &p);
         assert_valid(&c);
     }
+    assert!(c.phase_measures()[1] > 0.5 * area0);
     // The object now touches the border: interface vertices lie on x = 0 ...
     let on_border: Vec<_> = c
         .vertex_ids()
         .filter(|&v| c.class(v).on_interface() && c.position(v).x == 0.0)
         .collect();
-    assert!(on_border.len() >= 2, "interface never reached the border");
+    let min_x = c
+        .vertex_ids()
+        .filter(|&v| c.class(v).on_interface())
+        .map(|v| c.position(v).x)
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        on_border.len() >= 2,
+        "interface never reached the border: {} on it, min x {min_x}, area {:?}",
+        on_border.len(),
+        c.phase_measures()
+    );
     // ... and they keep sliding along it when pushed sideways.
     let y0: Vec<f64> = on_border.iter().map(|&v| c.position(v).y).collect();
     let mut d = dsc_seg::dsc::Destinations::new(&c);
