@@ -142,7 +142,7 @@ impl Flipper {
                         }
                         let Some(m) = phases.mean_of(l) else { return };
                         let de = st.sse(m) - base + nu * added_length(complex, c, own, l);
-                        if de < 0.0 && best.map_or(true, |(b, _)| de < b) {
+                        if de < 0.0 && best.is_none_or(|(b, _)| de < b) {
                             best = Some((de, l));
                         }
                     };
@@ -231,7 +231,7 @@ impl Flipper {
             for &(l, len) in &self.shared {
                 let Some(m) = phases.mean_of(l) else { continue };
                 let de = acc.sse(m) - base - nu * len;
-                if de < 0.0 && best.map_or(true, |(b, _)| de < b) {
+                if de < 0.0 && best.is_none_or(|(b, _)| de < b) {
                     best = Some((de, l));
                 }
             }

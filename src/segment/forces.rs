@@ -274,6 +274,7 @@ impl<K: Raster> ForceField<K> {
                 }
                 self.facets.push(Facet { corners, a, b });
                 // neighbours along the boundaries of a and b
+                #[allow(clippy::needless_range_loop)] // p, q index two parallel arrays
                 for p in 0..nf {
                     for q in 0..nf {
                         if p == q {
@@ -426,10 +427,10 @@ fn junction_weights<P: Point>(acc: &mut Acc<P>, phases: &PhaseStats, intensity: 
             continue;
         };
         if m <= intensity {
-            if below.map_or(true, |(_, bm)| m > bm) {
+            if below.is_none_or(|(_, bm)| m > bm) {
                 below = Some((sl, m));
             }
-        } else if above.map_or(true, |(_, am)| m < am) {
+        } else if above.is_none_or(|(_, am)| m < am) {
             above = Some((sl, m));
         }
     }
