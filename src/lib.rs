@@ -7,6 +7,7 @@ pub mod complex;
 pub mod dim;
 pub mod dsc;
 pub mod error;
+pub mod figures;
 pub mod io;
 pub mod ops;
 pub mod phantom;

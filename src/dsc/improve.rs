@@ -164,30 +164,18 @@ impl<K: Connectivity> Complex<K> {
         stats
     }
 
-    /// The live cells within two rings of `seeds` (each once). `marks` is scratch.
+    /// The live cells around `seeds` (the union of their stars, each cell
+    /// once): only there can a move have spoilt the mesh. `marks` is scratch.
     pub fn region_cells(&self, seeds: &[VertexId], out: &mut Vec<CellId>, marks: &mut Vec<bool>) {
         out.clear();
         marks.clear();
         marks.resize(self.cell_capacity(), false);
         let mut star = Vec::new();
-        let mut ring: Vec<VertexId> = Vec::new();
-        let mut seen = vec![false; self.vertex_capacity()];
         for &v in seeds {
             if !self.is_vertex_alive(v) {
                 continue;
             }
             self.star_into(v, &mut star);
-            for &c in &star {
-                for &w in self.cell(c) {
-                    if !seen[w.index()] {
-                        seen[w.index()] = true;
-                        ring.push(w);
-                    }
-                }
-            }
-        }
-        for &w in &ring {
-            self.star_into(w, &mut star);
             for &c in &star {
                 if !marks[c.index()] {
                     marks[c.index()] = true;
@@ -251,32 +239,47 @@ impl<K: Connectivity> Complex<K> {
     ) -> (usize, usize, usize) {
         let straight_cos = params.straight_angle_deg.to_radians().cos();
         let (mut safe, mut unsafe_, mut splits) = (0, 0, 0);
-        for _sweep in 0..4 {
-            let mut changed = false;
-            for &c in cells {
-                if !self.is_alive(c) || !self.is_degenerate(c, params) {
-                    continue;
-                }
-                match self.collapse_cell(c, params, straight_cos) {
-                    Some(CollapseMode::Safe) => safe += 1,
-                    Some(CollapseMode::Unsafe) => unsafe_ += 1,
-                    None if K::N == 3 => {
-                        let (u, v) = self.longest_edge(c);
-                        let long =
-                            crate::dim::Point::length(&(self.position(u) - self.position(v)))
-                                > params.edge_length;
-                        if !(long && self.split_edge(u, v).is_ok()) {
-                            continue;
-                        }
-                        splits += 1;
-                    }
-                    None => continue,
-                }
-                changed = true;
-            }
-            if !changed {
+        // A worklist: a collapse reshapes the star of the vertex it keeps, so
+        // that star is checked again; the budget bounds pathological cascades.
+        let mut work: Vec<CellId> = cells.to_vec();
+        let mut star = Vec::new();
+        let mut budget = 4 * cells.len() + 16;
+        while let Some(c) = work.pop() {
+            if budget == 0 {
                 break;
             }
+            budget -= 1;
+            if !self.is_alive(c) || !self.is_degenerate(c, params) {
+                continue;
+            }
+            let touched = match self.collapse_cell(c, params, straight_cos) {
+                Some((mode, kept)) => {
+                    match mode {
+                        CollapseMode::Safe => safe += 1,
+                        CollapseMode::Unsafe => unsafe_ += 1,
+                    }
+                    kept
+                }
+                // 3D: no collapse removes it; split its longest edge if longer than L.
+                None if K::N == 3 => {
+                    let (u, v) = self.longest_edge(c);
+                    let long = crate::dim::Point::length(&(self.position(u) - self.position(v)))
+                        > params.edge_length;
+                    if !long {
+                        continue;
+                    }
+                    match self.split_edge(u, v) {
+                        Ok(m) => {
+                            splits += 1;
+                            m
+                        }
+                        Err(_) => continue,
+                    }
+                }
+                None => continue,
+            };
+            self.star_into(touched, &mut star);
+            work.extend_from_slice(&star);
         }
         (safe, unsafe_, splits)
     }
@@ -287,7 +290,7 @@ impl<K: Connectivity> Complex<K> {
         c: CellId,
         params: &DscParams,
         straight_cos: f64,
-    ) -> Option<CollapseMode> {
+    ) -> Option<(CollapseMode, VertexId)> {
         let edges = self.edges_by_length(c);
         // Where degenerate cells cluster, a collapse that removes one may leave
         // the surviving neighbours below the degenerate quality; it is still
@@ -303,7 +306,7 @@ impl<K: Connectivity> Complex<K> {
         for mode in [CollapseMode::Safe, CollapseMode::Unsafe] {
             for (&(u, v), &bound) in edges.iter().zip(&bounds) {
                 match self.collapse_edge(u, v, mode, bound, straight_cos) {
-                    Ok(_) => return Some(mode),
+                    Ok(kept) => return Some((mode, kept)),
                     Err(Rejection::Stale) => return None,
                     Err(_) => {}
                 }

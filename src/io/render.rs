@@ -118,6 +118,11 @@ pub struct Overlay<'a> {
     pub draw_mesh: bool,
     /// Width of interface lines in output pixels (default 3).
     pub line_width: f32,
+    /// Width of mesh lines in output pixels (default: 15% of
+    /// [`Overlay::line_width`], at least 0.6).
+    pub mesh_width: Option<f32>,
+    /// Opacity of the (white) mesh lines (default 0.35).
+    pub mesh_alpha: f32,
 }
 
 impl<'a> Overlay<'a> {
@@ -138,6 +143,8 @@ impl<'a> Overlay<'a> {
             scale: (TARGET_WIDTH / w).ceil().max(1.0),
             draw_mesh: true,
             line_width: 3.0,
+            mesh_width: None,
+            mesh_alpha: 0.35,
         }
     }
 
@@ -323,8 +330,8 @@ impl<'a> Overlay<'a> {
             edges.dedup();
             layers.push(Layer {
                 rgb: [255, 255, 255],
-                alpha: 0.35,
-                width: (0.15 * self.line_width).max(0.6),
+                alpha: self.mesh_alpha,
+                width: self.mesh_width.unwrap_or((0.15 * self.line_width).max(0.6)),
                 segments: edges.iter().map(|&[a, b]| [p(a), p(b)]).collect(),
             });
         }

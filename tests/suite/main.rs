@@ -3,6 +3,7 @@
 mod common;
 mod dsc2d;
 mod dsc3d;
+mod figures;
 mod generic;
 mod prop2d;
 mod seg3d;
