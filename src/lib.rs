@@ -12,6 +12,7 @@ pub mod io;
 pub mod ops;
 pub mod phantom;
 pub mod pipeline;
+pub mod pipeline3d;
 pub mod segment;
 
 pub use error::{Error, Result};

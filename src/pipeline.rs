@@ -87,7 +87,7 @@ struct Report<'a> {
 }
 
 /// Checks that `dir` can hold our outputs: creates it, then a staging directory in it.
-fn staging(dir: &Path) -> Result<tempfile::TempDir> {
+pub(crate) fn staging(dir: &Path) -> Result<tempfile::TempDir> {
     let err = |reason: String| Error::OutputDir {
         path: dir.to_path_buf(),
         reason,
@@ -103,7 +103,7 @@ fn staging(dir: &Path) -> Result<tempfile::TempDir> {
 }
 
 /// Moves every file of the staging directory into `dir`.
-fn publish(stage: tempfile::TempDir, dir: &Path, names: &[&str]) -> Result<()> {
+pub(crate) fn publish(stage: tempfile::TempDir, dir: &Path, names: &[&str]) -> Result<()> {
     for name in names {
         std::fs::rename(stage.path().join(name), dir.join(name)).map_err(|e| Error::OutputDir {
             path: dir.to_path_buf(),

@@ -2,7 +2,8 @@
 
 use clap::{Parser, Subcommand, ValueEnum};
 use dsc_seg::pipeline::{run_phantom, run_segment, SegmentJob, Source};
-use dsc_seg::segment::{Init, InitDisk, SegmentParams};
+use dsc_seg::pipeline3d::{run_phantom3d, run_segment3d, Segment3dJob};
+use dsc_seg::segment::{Init, InitBall, InitDisk, SegmentParams};
 use dsc_seg::Error;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -25,6 +26,97 @@ enum Command {
     Segment(SegmentArgs),
     /// Write a phantom image with its ground truth (NAME.png, NAME_gt.png, NAME_labels.png).
     Phantom(PhantomArgs),
+    /// Segment a volume (or, without VOLUME, a built-in 3D phantom) into N phases
+    /// with the tetrahedral DSC.
+    ///
+    /// Writes labels.tif (multi-page 8-bit, phase index 0..N-1 ordered by
+    /// increasing mean), mesh.vtu (tetrahedra, cell data `phase`),
+    /// interface.vtp (interface triangles, cell data `phase` and `phase_other`)
+    /// and report.json into --out.
+    Segment3d(Segment3dArgs),
+    /// Write a 3D phantom volume with its ground truth (NAME.tif, NAME_labels.tif).
+    Phantom3d(Phantom3dArgs),
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum Init3Kind {
+    /// Cells labelled by mean: N equal intervals of the dynamic range (bisection for N = 2).
+    Range,
+    /// Balls given with --ball, everything else phase 0.
+    Balls,
+    /// A label volume given with --init-labels.
+    Labels,
+}
+
+#[derive(Parser, Debug)]
+struct Segment3dArgs {
+    /// Input volume: a multi-page TIFF stack (8/16 bit), a folder of 2D slices, or
+    /// NIfTI (.nii, .nii.gz). Without it, a built-in 3D phantom is segmented.
+    volume: Option<PathBuf>,
+    /// Output directory (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Number of phases N, 2..=64.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 2)]
+    phases: i64,
+    /// Average edge length L of the mesh in voxels [default: min side/64 clamped to 3..8].
+    #[arg(long, allow_hyphen_values = true)]
+    edge_length: Option<f64>,
+    /// Iteration cap.
+    #[arg(long, default_value_t = 500)]
+    max_iterations: usize,
+    /// Initialisation.
+    #[arg(long, value_enum, default_value_t = Init3Kind::Range)]
+    init: Init3Kind,
+    /// A ball for --init balls: X,Y,Z,R in voxels, optionally ,PHASE (default 1). Repeatable.
+    #[arg(
+        long = "ball",
+        value_name = "X,Y,Z,R[,PHASE]",
+        allow_hyphen_values = true
+    )]
+    balls: Vec<String>,
+    /// Label volume for --init labels (same size as the volume, 8-bit values 0..N-1).
+    #[arg(long)]
+    init_labels: Option<PathBuf>,
+    /// Keep every cell's label: only the interfaces move.
+    #[arg(long)]
+    no_label_flips: bool,
+    /// Rigidity weight β of eq. (2).
+    #[arg(long, allow_hyphen_values = true)]
+    rigidity: Option<f64>,
+    /// Built-in 3D phantom to segment when no VOLUME is given.
+    #[arg(long, default_value = "two_balls")]
+    phantom: String,
+    /// Phantom side in voxels (without VOLUME).
+    #[arg(long, default_value_t = 64)]
+    phantom_size: usize,
+    /// Phantom noise standard deviation (without VOLUME).
+    #[arg(long, default_value_t = 0.1)]
+    phantom_noise: f64,
+    /// Phantom noise seed (without VOLUME).
+    #[arg(long, default_value_t = 1)]
+    phantom_seed: u64,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Parser, Debug)]
+struct Phantom3dArgs {
+    /// two_balls, torus or hollow_sphere.
+    name: String,
+    /// Side in voxels.
+    #[arg(long, default_value_t = 64)]
+    size: usize,
+    /// Standard deviation of the additive Gaussian noise (intensities in [0,1]).
+    #[arg(long, default_value_t = 0.1, allow_hyphen_values = true)]
+    noise: f64,
+    /// Seed of the noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output directory.
+    #[arg(long)]
+    out: PathBuf,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -224,6 +316,95 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
     Ok(())
 }
 
+fn parse_ball(s: &str) -> Result<InitBall, Error> {
+    let bad = || Error::Usage(format!("--ball {s:?}: expected X,Y,Z,R[,PHASE]"));
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    if !(4..=5).contains(&v.len()) || (v.len() == 5 && (v[4] < 0.0 || v[4].fract() != 0.0)) {
+        return Err(bad());
+    }
+    Ok(InitBall {
+        centre: [v[0], v[1], v[2]],
+        r: v[3],
+        phase: v.get(4).map_or(1, |&p| p as u32),
+    })
+}
+
+fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
+    let source = match &a.volume {
+        Some(p) => Source::File(p.clone()),
+        None => Source::Phantom {
+            name: a.phantom.clone(),
+            size: a.phantom_size,
+            noise: a.phantom_noise,
+            seed: a.phantom_seed,
+        },
+    };
+    if !(2..=64).contains(&a.phases) {
+        return Err(Error::Usage(format!(
+            "--phases {}: the number of phases must be between 2 and 64",
+            a.phases
+        )));
+    }
+    let mut params = SegmentParams::new_3d(a.phases as usize);
+    params.edge_length = a.edge_length;
+    params.max_iterations = a.max_iterations;
+    params.label_flips = !a.no_label_flips;
+    if let Some(b) = a.rigidity {
+        params.rigidity = b;
+    }
+    params.init = match a.init {
+        Init3Kind::Range => Init::Range,
+        Init3Kind::Balls => {
+            if a.balls.is_empty() {
+                return Err(Error::Usage(
+                    "--init balls needs at least one --ball X,Y,Z,R".into(),
+                ));
+            }
+            Init::Balls(
+                a.balls
+                    .iter()
+                    .map(|s| parse_ball(s))
+                    .collect::<Result<_, _>>()?,
+            )
+        }
+        Init3Kind::Labels => {
+            if a.init_labels.is_none() {
+                return Err(Error::Usage(
+                    "--init labels needs --init-labels VOLUME".into(),
+                ));
+            }
+            Init::Labels { labels: Vec::new() }
+        }
+    };
+    let job = Segment3dJob {
+        source,
+        out: a.out,
+        params,
+        init_labels: a.init_labels,
+        quiet: a.quiet,
+    };
+    let report = run_segment3d(&job)?;
+    if !a.quiet {
+        eprintln!(
+            "{} after {} iterations ({:.2} s), {} tets; outputs in {}",
+            if report.converged {
+                "converged"
+            } else {
+                "stopped at the iteration cap"
+            },
+            report.iterations,
+            report.times.total,
+            report.cells,
+            job.out.display()
+        );
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -233,6 +414,14 @@ fn main() -> ExitCode {
                 println!("{}", a.out.join(n).display());
             }
         }),
+        Command::Segment3d(a) => segment3d(a),
+        Command::Phantom3d(a) => {
+            run_phantom3d(&a.name, a.size, a.noise, a.seed, &a.out).map(|names| {
+                for n in names {
+                    println!("{}", a.out.join(n).display());
+                }
+            })
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

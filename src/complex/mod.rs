@@ -10,6 +10,7 @@ mod cavity;
 mod class;
 mod export;
 mod ids;
+mod junction;
 mod measure;
 mod validate;
 

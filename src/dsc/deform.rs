@@ -181,4 +181,5 @@ fn add(total: &mut ImproveStats, s: ImproveStats) {
     total.flips += s.flips;
     total.safe_collapses += s.safe_collapses;
     total.unsafe_collapses += s.unsafe_collapses;
+    total.degenerate_splits += s.degenerate_splits;
 }

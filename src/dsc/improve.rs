@@ -70,11 +70,54 @@ fn flip_sweeps(
 }
 
 impl Connectivity for D3 {
-    /// 3D flips come with the tetrahedral DSC; until then smoothing and
-    /// collapses alone improve 3D meshes.
-    fn improve_connectivity(_complex: &mut Complex<D3>, _params: &DscParams) -> usize {
-        0
+    /// Visits every tet below `low_quality` and tries edge removal (3-2, 4-4 and
+    /// larger rings) on its edges, then 2-3 flips on its facets, off the
+    /// interface, accepting a flip only when the smallest quality of the tets
+    /// involved increases (at most 4 sweeps).
+    fn improve_connectivity(complex: &mut Complex<D3>, params: &DscParams) -> usize {
+        tet_flip_sweeps(complex, params, |c, out| {
+            out.clear();
+            out.extend(c.cell_ids());
+        })
     }
+
+    fn improve_connectivity_near(
+        complex: &mut Complex<D3>,
+        seeds: &[VertexId],
+        params: &DscParams,
+    ) -> usize {
+        let mut marks = Vec::new();
+        tet_flip_sweeps(complex, params, |c, out| {
+            c.region_cells(seeds, out, &mut marks)
+        })
+    }
+}
+
+/// Flips low-quality tets among those `region` lists until nothing changes (at most 4 sweeps).
+fn tet_flip_sweeps(
+    complex: &mut Complex<D3>,
+    params: &DscParams,
+    mut region: impl FnMut(&Complex<D3>, &mut Vec<CellId>),
+) -> usize {
+    let mut flips = 0;
+    let mut cells = Vec::new();
+    for _sweep in 0..4 {
+        let mut changed = 0;
+        region(complex, &mut cells);
+        for &c in &cells {
+            if !complex.is_alive(c) || complex.quality(c) >= params.low_quality {
+                continue;
+            }
+            if complex.improve_tet(c, 0.0).is_some() {
+                changed += 1;
+            }
+        }
+        flips += changed;
+        if changed == 0 {
+            break;
+        }
+    }
+    flips
 }
 
 /// Counts of what one improvement did.
@@ -88,6 +131,8 @@ pub struct ImproveStats {
     pub safe_collapses: usize,
     /// Collapses that merged interface vertices (topology may change).
     pub unsafe_collapses: usize,
+    /// Degenerate tets that no collapse could remove, split at their longest edge (3D only).
+    pub degenerate_splits: usize,
 }
 
 impl<K: Connectivity> Complex<K> {
@@ -111,9 +156,10 @@ impl<K: Connectivity> Complex<K> {
         stats.flips += K::improve_connectivity_near(self, seeds, params);
         self.region_cells(seeds, &mut cells, &mut marks);
         self.grow_region(&mut cells, &mut marks);
-        let (safe, unsafe_) = self.remove_degenerate_in(&cells, params);
+        let (safe, unsafe_, splits) = self.remove_degenerate_in(&cells, params);
         stats.safe_collapses += safe;
         stats.unsafe_collapses += unsafe_;
+        stats.degenerate_splits += splits;
         stats.flips += K::improve_connectivity_near(self, seeds, params);
         stats.smoothed += self.smooth_vertices(&vertices);
         stats
@@ -198,16 +244,22 @@ impl<K: Connectivity> Complex<K> {
 
     /// Removes degenerate cells by collapsing their edges, shortest first: a
     /// safe collapse where one exists, otherwise an unsafe one (which may merge
-    /// interfaces: the DSC's topology change). Returns (safe, unsafe) counts.
-    pub fn remove_degenerate(&mut self, params: &DscParams) -> (usize, usize) {
+    /// interfaces: the DSC's topology change). In 3D a degenerate tet that no
+    /// collapse removes is split at its longest edge when that is longer than `L`.
+    /// Returns the (safe, unsafe, split) counts.
+    pub fn remove_degenerate(&mut self, params: &DscParams) -> (usize, usize, usize) {
         let all: Vec<CellId> = self.cell_ids().collect();
         self.remove_degenerate_in(&all, params)
     }
 
     /// [`remove_degenerate`](Self::remove_degenerate) over the given cells.
-    pub fn remove_degenerate_in(&mut self, cells: &[CellId], params: &DscParams) -> (usize, usize) {
+    pub fn remove_degenerate_in(
+        &mut self,
+        cells: &[CellId],
+        params: &DscParams,
+    ) -> (usize, usize, usize) {
         let straight_cos = params.straight_angle_deg.to_radians().cos();
-        let (mut safe, mut unsafe_) = (0, 0);
+        let (mut safe, mut unsafe_, mut splits) = (0, 0, 0);
         // A worklist: a collapse reshapes the star of the vertex it keeps, so
         // that star is checked again; the budget bounds pathological cascades.
         let mut work: Vec<CellId> = cells.to_vec();
@@ -221,17 +273,36 @@ impl<K: Connectivity> Complex<K> {
             if !self.is_alive(c) || !self.is_degenerate(c, params) {
                 continue;
             }
-            let Some((mode, kept)) = self.collapse_cell(c, params, straight_cos) else {
-                continue;
+            let touched = match self.collapse_cell(c, params, straight_cos) {
+                Some((mode, kept)) => {
+                    match mode {
+                        CollapseMode::Safe => safe += 1,
+                        CollapseMode::Unsafe => unsafe_ += 1,
+                    }
+                    kept
+                }
+                // 3D: no collapse removes it; split its longest edge if longer than L.
+                None if K::N == 3 => {
+                    let (u, v) = self.longest_edge(c);
+                    let long = crate::dim::Point::length(&(self.position(u) - self.position(v)))
+                        > params.edge_length;
+                    if !long {
+                        continue;
+                    }
+                    match self.split_edge(u, v) {
+                        Ok(m) => {
+                            splits += 1;
+                            m
+                        }
+                        Err(_) => continue,
+                    }
+                }
+                None => continue,
             };
-            match mode {
-                CollapseMode::Safe => safe += 1,
-                CollapseMode::Unsafe => unsafe_ += 1,
-            }
-            self.star_into(kept, &mut star);
+            self.star_into(touched, &mut star);
             work.extend_from_slice(&star);
         }
-        (safe, unsafe_)
+        (safe, unsafe_, splits)
     }
 
     /// Tries to collapse one edge of `c`, shortest first, safe before unsafe.
@@ -242,9 +313,20 @@ impl<K: Connectivity> Complex<K> {
         straight_cos: f64,
     ) -> Option<(CollapseMode, VertexId)> {
         let edges = self.edges_by_length(c);
+        // Where degenerate cells cluster, a collapse that removes one may leave
+        // the surviving neighbours below the degenerate quality; it is still
+        // accepted if it makes no surviving cell worse than the worst one there.
+        let bounds: Vec<f64> = edges
+            .iter()
+            .map(|&(u, v)| {
+                params
+                    .degenerate_quality
+                    .min(self.worst_surviving_quality(u, v))
+            })
+            .collect();
         for mode in [CollapseMode::Safe, CollapseMode::Unsafe] {
-            for &(u, v) in &edges {
-                match self.collapse_edge(u, v, mode, params.degenerate_quality, straight_cos) {
+            for (&(u, v), &bound) in edges.iter().zip(&bounds) {
+                match self.collapse_edge(u, v, mode, bound, straight_cos) {
                     Ok(kept) => return Some((mode, kept)),
                     Err(Rejection::Stale) => return None,
                     Err(_) => {}
@@ -252,5 +334,22 @@ impl<K: Connectivity> Complex<K> {
             }
         }
         None
+    }
+
+    /// Worst quality of the cells around `u` or `v` that do not contain the edge
+    /// `uv` (the cells a collapse of `uv` keeps, reshaped).
+    fn worst_surviving_quality(&self, u: VertexId, v: VertexId) -> f64 {
+        let mut star = Vec::new();
+        let mut worst: f64 = 1.0;
+        for w in [u, v] {
+            self.star_into(w, &mut star);
+            for &c in &star {
+                let cell = self.cell(c);
+                if !(cell.contains(&u) && cell.contains(&v)) {
+                    worst = worst.min(self.quality(c));
+                }
+            }
+        }
+        worst
     }
 }

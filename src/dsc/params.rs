@@ -29,6 +29,9 @@ pub struct DscParams {
     pub degenerate_quality: f64,
     /// A collapse is safe only if the cells it creates reach this quality (2D: a 10° smallest angle; 3D: 0.3).
     pub min_quality: f64,
+    /// Cells below this quality are improved by flips (3D: 2-3 flips and edge
+    /// removal, 0.3); 2D flips every non-Delaunay edge and ignores it.
+    pub low_quality: f64,
     /// Interface edges longer than this times `L` are split.
     pub max_length: f64,
     /// Interface edges shorter than this times `L` are collapsed where the interface is straight.
@@ -53,18 +56,21 @@ pub struct DscParams {
 impl DscParams {
     /// The defaults for dimension `K` at average edge length `edge_length`.
     pub fn new<K: Dim>(edge_length: f64) -> Self {
-        let (degenerate_quality, min_quality) = if K::N == 2 {
+        // 3D: interface faces are flat when adjacent normals satisfy |n1·n2| >= 0.995.
+        let (degenerate_quality, min_quality, straight_angle_deg) = if K::N == 2 {
             (
                 D2::quality_of_min_angle(2.0),
                 D2::quality_of_min_angle(10.0),
+                10.0,
             )
         } else {
-            (0.02, 0.3)
+            (0.02, 0.3, 0.995f64.acos().to_degrees())
         };
         DscParams {
             edge_length,
             degenerate_quality,
             min_quality,
+            low_quality: 0.3,
             max_length: 2.0,
             min_length: 0.5,
             degenerate_length: 0.1,
@@ -72,7 +78,7 @@ impl DscParams {
             min_measure: 0.2,
             degenerate_measure: 0.04,
             move_tolerance: 1e-4,
-            straight_angle_deg: 10.0,
+            straight_angle_deg,
             max_rounds: 10,
         }
     }
@@ -99,6 +105,12 @@ impl DscParams {
             self.min_quality,
             self.min_quality >= self.degenerate_quality && self.min_quality < 1.0,
             "must lie in [degenerate_quality, 1)",
+        )?;
+        check(
+            "low_quality",
+            self.low_quality,
+            (0.0..=1.0).contains(&self.low_quality),
+            "must lie in [0, 1]",
         )?;
         check(
             "max_length",

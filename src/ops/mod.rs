@@ -5,9 +5,11 @@
 
 mod collapse;
 mod flip2d;
+mod flip3d;
 mod relocate;
 mod smooth;
 mod split;
 
 pub use collapse::CollapseMode;
+pub use flip3d::{Flip3, MAX_RING};
 pub use relocate::MoveOutcome;

@@ -130,7 +130,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         if image.dims.iter().take(K::N).any(|&d| d < 2) {
             return Err(SegmentError::ImageTooSmall(w, h));
         }
-        params.validate(w, h)?;
+        params.validate_dims(image.dims)?;
         let range = image.range().ok_or(SegmentError::NonFinite)?;
         if range.1 - range.0 <= 0.0 {
             return Err(SegmentError::ConstantImage(range.0));

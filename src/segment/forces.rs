@@ -151,6 +151,9 @@ impl<K: Raster> ForceField<K> {
         let class = complex.class(v);
         match class.kind {
             VertexKind::Interior => return ForceKind::Off,
+            // 3D: a two-piece star can still sit on an edge with more than two
+            // interface triangles (two sheets of a phase touching): a crossing.
+            VertexKind::Interface if complex.has_junction_edge(v) => return ForceKind::Crossing,
             VertexKind::Interface => return ForceKind::Interface,
             VertexKind::Junction => {}
         }
@@ -275,6 +278,7 @@ impl<K: Raster> ForceField<K> {
                 }
                 self.facets.push(Facet { corners, a, b });
                 // neighbours along the boundaries of a and b
+                #[allow(clippy::needless_range_loop)] // p, q index two parallel arrays
                 for p in 0..nf {
                     for q in 0..nf {
                         if p == q {

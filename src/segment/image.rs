@@ -22,6 +22,15 @@ impl<'a> ImageView<'a> {
         })
     }
 
+    /// A 3D view of `nx × ny × nz` voxels (x fastest); `None` when the sizes disagree.
+    pub fn new_3d(dims: [usize; 3], data: &'a [f32]) -> Option<Self> {
+        (dims[0]
+            .checked_mul(dims[1])
+            .and_then(|a| a.checked_mul(dims[2]))
+            == Some(data.len()))
+        .then_some(ImageView { dims, data })
+    }
+
     /// Width in pixels.
     pub fn width(&self) -> usize {
         self.dims[0]

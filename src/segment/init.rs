@@ -60,6 +60,21 @@ pub fn initialise<K: Raster>(
             complex.set_labels(&changes);
             Ok(vec![None; n])
         }
+        Init::Balls(balls) => {
+            for &c in &ids {
+                let g = centroid(complex, c);
+                let mut l = 0;
+                for b in balls {
+                    let d2: f64 = (0..K::N).map(|a| (g[a] - b.centre[a]).powi(2)).sum();
+                    if d2 < b.r * b.r {
+                        l = b.phase;
+                    }
+                }
+                changes.push((c, l));
+            }
+            complex.set_labels(&changes);
+            Ok(vec![None; n])
+        }
         Init::Labels { labels } => {
             let mut votes = vec![0u32; n];
             for &c in &ids {

@@ -20,11 +20,15 @@ pub mod forces;
 pub mod image;
 pub mod init;
 pub mod integrate;
+pub mod output3d;
 pub mod params;
 pub mod raster;
+pub mod voxel3d;
 
 pub use driver::{IterationRecord, SegmentReport, Segmentation, StageTimes, StopReason};
 pub use error::SegmentError;
 pub use image::ImageView;
-pub use params::{default_edge_length, ForceModel, Init, InitDisk, SegmentParams, MAX_PHASES};
+pub use params::{
+    default_edge_length, ForceModel, Init, InitBall, InitDisk, SegmentParams, MAX_PHASES,
+};
 pub use raster::Raster;

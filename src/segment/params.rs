@@ -29,6 +29,9 @@ pub enum Init {
     /// Everything phase 0 except the cells whose centroid lies in a disk,
     /// which get the disk's phase (later disks win).
     Disks(Vec<InitDisk>),
+    /// Everything phase 0 except the cells whose centroid lies in a ball
+    /// (3D), which get the ball's phase (later balls win).
+    Balls(Vec<InitBall>),
     /// A label per pixel (row-major, the image's size, values `< phases`);
     /// each cell gets the label of the majority of its pixels.
     Labels {
@@ -45,6 +48,17 @@ pub struct InitDisk {
     pub x: f64,
     /// Centre y (row direction).
     pub y: f64,
+    /// Radius.
+    pub r: f64,
+    /// Phase given to the cells inside.
+    pub phase: u32,
+}
+
+/// A ball of the [`Init::Balls`] initialisation, in voxel units.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct InitBall {
+    /// Centre (x, y, z).
+    pub centre: [f64; 3],
     /// Radius.
     pub r: f64,
     /// Phase given to the cells inside.
@@ -130,13 +144,33 @@ impl SegmentParams {
         }
     }
 
+    /// The defaults for a volume (3D) with `phases` phases: as [`new`](Self::new)
+    /// but `length_weight` 0.1. The length term is an area in 3D, and a thin
+    /// structure has more area per voxel than a 2D shape has length per pixel:
+    /// at 0.4 the flip guard removed the whole torus of the 32³ phantom (its
+    /// tube is 7 voxels across; mean Dice 0.48), at 0.1 two balls, torus and
+    /// hollow sphere at noise 0.1 reach mean Dice 0.978, 0.962 and 0.939.
+    pub fn new_3d(phases: usize) -> Self {
+        SegmentParams {
+            length_weight: 0.1,
+            ..Self::new(phases)
+        }
+    }
+
     /// Checks every value against the image size; the first violation is returned.
     pub fn validate(&self, width: usize, height: usize) -> Result<(), SegmentError> {
+        self.validate_dims([width, height, 1])
+    }
+
+    /// [`validate`](Self::validate) for an image or volume of `dims` samples
+    /// (`dims[2] == 1` for a 2D image).
+    pub fn validate_dims(&self, dims: [usize; 3]) -> Result<(), SegmentError> {
+        let [width, height, depth] = dims;
         if self.phases < 2 || self.phases > MAX_PHASES {
             return Err(SegmentError::Phases(self.phases));
         }
         if let Some(l) = self.edge_length {
-            let max = width.min(height) as f64;
+            let max = dims.iter().filter(|&&d| d > 1).copied().min().unwrap_or(1) as f64;
             if !(l.is_finite() && l > 0.0) {
                 return Err(SegmentError::EdgeLength(
                     l,
@@ -212,13 +246,35 @@ impl SegmentParams {
                     }
                 }
             }
+            Init::Balls(balls) => {
+                if balls.is_empty() {
+                    return Err(SegmentError::Init("at least one ball is needed".into()));
+                }
+                for b in balls {
+                    if !(b.centre.iter().all(|x| x.is_finite()) && b.r.is_finite() && b.r > 0.0) {
+                        return Err(SegmentError::Init(format!(
+                            "ball {:?},{} needs finite numbers and a positive radius",
+                            b.centre, b.r
+                        )));
+                    }
+                    if b.phase as usize >= self.phases {
+                        return Err(SegmentError::Init(format!(
+                            "ball phase {} is not below the number of phases {}",
+                            b.phase, self.phases
+                        )));
+                    }
+                }
+            }
             Init::Labels { labels } => {
-                if labels.len() != width * height {
+                if labels.len() != width * height * depth {
                     return Err(SegmentError::Init(format!(
-                        "the label image has {} pixels but the image has {}×{}",
+                        "the label image has {} samples but the image has {}",
                         labels.len(),
-                        width,
-                        height
+                        if depth > 1 {
+                            format!("{width}×{height}×{depth}")
+                        } else {
+                            format!("{width}×{height}")
+                        }
                     )));
                 }
                 if let Some(&m) = labels.iter().max() {

@@ -1,16 +1,15 @@
 //! The dimension-specific part of the segmentation: which pixels a cell
 //! covers, where to sample a facet, and how to interpolate the image.
 //!
-//! Everything else in [`crate::segment`] is written once against [`Raster`].
-//! A 3D implementation needs tetrahedra over voxels (the same half-open
-//! centre rule, slice by slice and row by row), quadrature points on triangles
-//! and trilinear sampling.
+//! Everything else in [`crate::segment`] is written once against [`Raster`],
+//! implemented for triangles over pixels ([`D2`]) and tetrahedra over voxels
+//! ([`D3`], built on [`voxel3d`](super::voxel3d)).
 
 use super::image::ImageView;
 use crate::complex::{BuildError, Complex};
-use crate::dim::{Dim, D2};
+use crate::dim::{Dim, D2, D3};
 use crate::dsc::Connectivity;
-use nalgebra::Vector2;
+use nalgebra::{Vector2, Vector3};
 
 /// Image access for cells and facets of dimension `Self`.
 ///
@@ -142,3 +141,73 @@ impl Raster for D2 {
 
 /// The dimension's point type, for generic code that names it.
 pub type PointOf<K> = <K as Dim>::Point;
+
+impl Raster for D3 {
+    /// Voxel-centre rule with ties broken by simulation of simplicity
+    /// ([`tet_voxels`](super::voxel3d::tet_voxels)): each voxel of a tiling is
+    /// visited exactly once, whatever lies on shared facets, edges or vertices.
+    fn cell_pixels(image: &ImageView<'_>, c: &[Vector3<f64>], visit: &mut impl FnMut(usize)) {
+        let [nx, ny, _] = image.dims;
+        let t = [c[0], c[1], c[2], c[3]];
+        super::voxel3d::tet_voxels(&t, image.dims, |i, j, k| visit(i + nx * (j + ny * k)));
+    }
+
+    /// Degree-2 Gaussian quadrature on about `spacing²`-sized sub-triangles
+    /// ([`triangle_quadrature`](super::voxel3d::triangle_quadrature)).
+    fn facet_samples(
+        c: &[Vector3<f64>],
+        spacing: f64,
+        visit: &mut impl FnMut(Vector3<f64>, &[f64], f64),
+    ) {
+        let t = [c[0], c[1], c[2]];
+        super::voxel3d::triangle_quadrature(&t, spacing, |s| {
+            visit(s.position, &s.barycentric, s.weight)
+        });
+    }
+
+    fn sample(image: &ImageView<'_>, p: Vector3<f64>) -> f64 {
+        let mut i0 = [0usize; 3];
+        let mut i1 = [0usize; 3];
+        let mut t = [0.0; 3];
+        for axis in 0..3 {
+            let n = image.dims[axis];
+            let x = (p[axis] - 0.5).clamp(0.0, (n - 1) as f64);
+            i0[axis] = (x.floor() as usize).min(n - 1);
+            i1[axis] = (i0[axis] + 1).min(n - 1);
+            t[axis] = x - i0[axis] as f64;
+        }
+        let [nx, ny, _] = image.dims;
+        let v = |i: usize, j: usize, k: usize| image.data[i + nx * (j + ny * k)] as f64;
+        let mut out = 0.0;
+        for corner in 0..8usize {
+            let mut w = 1.0;
+            let mut idx = [0usize; 3];
+            for axis in 0..3 {
+                if corner >> axis & 1 == 1 {
+                    w *= t[axis];
+                    idx[axis] = i1[axis];
+                } else {
+                    w *= 1.0 - t[axis];
+                    idx[axis] = i0[axis];
+                }
+            }
+            if w != 0.0 {
+                out += w * v(idx[0], idx[1], idx[2]);
+            }
+        }
+        out
+    }
+
+    fn pixel_centre(image: &ImageView<'_>, index: usize) -> Vector3<f64> {
+        let [nx, ny, _] = image.dims;
+        Vector3::new(
+            (index % nx) as f64 + 0.5,
+            ((index / nx) % ny) as f64 + 0.5,
+            (index / (nx * ny)) as f64 + 0.5,
+        )
+    }
+
+    fn box_complex(image: &ImageView<'_>, l: f64) -> Result<Complex<D3>, BuildError> {
+        Complex::cuboid(image.dims.map(|d| d as f64), l)
+    }
+}

@@ -1,0 +1,34 @@
+//! One iteration of the 3D segmentation (integrate, flips, forces, deform) on
+//! the 128³ two-balls phantom at the default edge length, after a few warm-up
+//! iterations so the interface sits near the objects. Prints the tet count.
+//! Peak memory: run the `segment3d` command under `/usr/bin/time -v`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use dsc_seg::dim::D3;
+use dsc_seg::phantom::shapes3d;
+use dsc_seg::segment::{ImageView, SegmentParams, Segmentation};
+
+fn iteration_128(c: &mut Criterion) {
+    let n = 128;
+    let ph = shapes3d::two_balls(n, 0.1, 1);
+    let view = ImageView::new_3d([n, n, n], &ph.image).unwrap();
+    let mut seg = Segmentation::<D3>::new(view, SegmentParams::new_3d(2)).unwrap();
+    for _ in 0..3 {
+        seg.step();
+    }
+    eprintln!(
+        "128³ two balls: {} tets, {} vertices, L = {}",
+        seg.complex().cell_count(),
+        seg.complex().vertex_count(),
+        seg.dsc_params().edge_length
+    );
+    let mut group = c.benchmark_group("segment3d");
+    group.sample_size(10);
+    group.bench_function("one iteration, 128³", |b| {
+        b.iter(|| seg.step());
+    });
+    group.finish();
+}
+
+criterion_group!(benches, iteration_128);
+criterion_main!(benches);
