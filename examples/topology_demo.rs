@@ -84,6 +84,25 @@ fn main() -> Result<(), Box<dyn Error>> {
         assert!(mesh.validate().is_empty());
     }
     save_gif(out.join("topology.gif"), &frames, 200)?;
+    // The distribution of smallest angles after all that deformation.
+    let mut bins = [0usize; 6];
+    for c in mesh.cell_ids() {
+        let angle = D2::min_angle_of_quality(mesh.quality(c));
+        bins[((angle / 10.0) as usize).min(5)] += 1;
+    }
+    let total = mesh.cell_count() as f64;
+    println!(
+        "smallest-angle distribution over {} triangles:",
+        mesh.cell_count()
+    );
+    for (i, n) in bins.iter().enumerate() {
+        println!(
+            "  {:2}–{:2}°: {:5.1}%",
+            10 * i,
+            10 * i + 10,
+            100.0 * *n as f64 / total
+        );
+    }
     println!("wrote {}", out.display());
     Ok(())
 }
