@@ -2,7 +2,7 @@
 
 use clap::{Parser, Subcommand, ValueEnum};
 use dsc_seg::pipeline::{run_phantom, run_segment, SegmentJob, Source};
-use dsc_seg::segment::{Init, InitDisk, SegmentParams};
+use dsc_seg::segment::{Init, InitDisk, JunctionForce, SegmentParams};
 use dsc_seg::Error;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -25,6 +25,13 @@ enum Command {
     Segment(SegmentArgs),
     /// Write a phantom image with its ground truth (NAME.png, NAME_gt.png, NAME_labels.png).
     Phantom(PhantomArgs),
+}
+
+/// `--junction-force` values.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum JunctionArg {
+    Paper,
+    EdgeLocal,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -78,6 +85,10 @@ struct SegmentArgs {
     /// Largest displacement per iteration as a fraction of L.
     #[arg(long, allow_hyphen_values = true)]
     step_fraction: Option<f64>,
+    /// Triple-junction force: `paper` (eq. 7, junction phases bracket every
+    /// sample) or `edge-local` (each sample bracketed by its own edge's phases).
+    #[arg(long, value_enum)]
+    junction_force: Option<JunctionArg>,
     /// Weight of the length term of the Mumford–Shah energy, as a multiple of the smallest gap between phase means.
     #[arg(long, allow_hyphen_values = true)]
     length_weight: Option<f64>,
@@ -170,6 +181,12 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
     }
     if let Some(c) = a.step_fraction {
         params.step_fraction = c;
+    }
+    if let Some(j) = a.junction_force {
+        params.junction_force = match j {
+            JunctionArg::Paper => JunctionForce::Paper,
+            JunctionArg::EdgeLocal => JunctionForce::EdgeLocal,
+        };
     }
     if let Some(w) = a.length_weight {
         params.length_weight = w;

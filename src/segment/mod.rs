@@ -26,5 +26,7 @@ pub mod raster;
 pub use driver::{IterationRecord, SegmentReport, Segmentation, StageTimes, StopReason};
 pub use error::SegmentError;
 pub use image::ImageView;
-pub use params::{default_edge_length, ForceModel, Init, InitDisk, SegmentParams, MAX_PHASES};
+pub use params::{
+    default_edge_length, ForceModel, Init, InitDisk, JunctionForce, SegmentParams, MAX_PHASES,
+};
 pub use raster::Raster;
