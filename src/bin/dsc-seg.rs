@@ -3,7 +3,7 @@
 use clap::{Parser, Subcommand, ValueEnum};
 use dsc_seg::pipeline::{run_phantom, run_segment, SegmentJob, Source};
 use dsc_seg::pipeline3d::{run_phantom3d, run_segment3d, Segment3dJob};
-use dsc_seg::segment::{Init, InitBall, InitDisk, SegmentParams};
+use dsc_seg::segment::{Init, InitBall, InitDisk, JunctionForce, SegmentParams};
 use dsc_seg::Error;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -119,6 +119,13 @@ struct Phantom3dArgs {
     out: PathBuf,
 }
 
+/// `--junction-force` values.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum JunctionArg {
+    Paper,
+    EdgeLocal,
+}
+
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum InitKind {
     /// Cells labelled by mean: N equal intervals of the dynamic range (bisection for N = 2).
@@ -170,6 +177,10 @@ struct SegmentArgs {
     /// Largest displacement per iteration as a fraction of L.
     #[arg(long, allow_hyphen_values = true)]
     step_fraction: Option<f64>,
+    /// Triple-junction force: `paper` (eq. 7, junction phases bracket every
+    /// sample) or `edge-local` (each sample bracketed by its own edge's phases).
+    #[arg(long, value_enum)]
+    junction_force: Option<JunctionArg>,
     /// Weight of the length term of the Mumford–Shah energy, as a multiple of the smallest gap between phase means.
     #[arg(long, allow_hyphen_values = true)]
     length_weight: Option<f64>,
@@ -262,6 +273,12 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
     }
     if let Some(c) = a.step_fraction {
         params.step_fraction = c;
+    }
+    if let Some(j) = a.junction_force {
+        params.junction_force = match j {
+            JunctionArg::Paper => JunctionForce::Paper,
+            JunctionArg::EdgeLocal => JunctionForce::EdgeLocal,
+        };
     }
     if let Some(w) = a.length_weight {
         params.length_weight = w;

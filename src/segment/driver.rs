@@ -275,6 +275,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let l = self.dsc.edge_length;
         let settings = ForceSettings {
             model: self.params.force,
+            junction: self.params.junction_force,
             spacing: self.params.sample_spacing,
             equal_means: 1e-6 * (self.range.1 - self.range.0),
         };

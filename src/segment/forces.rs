@@ -12,10 +12,14 @@
 //! Junctions ([`VertexKind::Junction`]) get the external force of eq. (7) only
 //! when every phase around them occurs once (a triple junction); a crossing
 //! where a phase occurs twice gets none and is resolved by its neighbours.
+//! Eq. (7) is integrated over the junction's adjacent edges with the same hat
+//! weights as the edge forces (a single sample at the junction point is very
+//! noisy), either as the paper states it or per edge
+//! ([`JunctionForce`]).
 
 use super::image::ImageView;
 use super::integrate::PhaseStats;
-use super::params::ForceModel;
+use super::params::{ForceModel, JunctionForce};
 use super::raster::Raster;
 use crate::complex::{CellId, Complex, Label, VertexId, VertexKind};
 use crate::dim::{Dim, Point};
@@ -95,6 +99,8 @@ struct Facet {
 pub struct ForceSettings {
     /// Region force model.
     pub model: ForceModel,
+    /// Triple-junction force (eq. 7 as the paper states it, or per edge).
+    pub junction: JunctionForce,
     /// Sample spacing along facets (pixels).
     pub spacing: f64,
     /// Mean gaps below this count as equal means: no region force across them.
@@ -329,7 +335,12 @@ impl<K: Raster> ForceField<K> {
                             }
                             ForceKind::TripleJunction => {
                                 ac.share += wk;
-                                junction_weights(ac, phases, intensity, wk);
+                                match s.junction {
+                                    JunctionForce::Paper => {
+                                        junction_weights(ac, phases, intensity, wk)
+                                    }
+                                    JunctionForce::EdgeLocal => ac.ext += normal * (f * wk),
+                                }
                             }
                             _ => {}
                         }
@@ -385,6 +396,11 @@ impl<K: Raster> ForceField<K> {
             match acc.kind {
                 ForceKind::Off => continue,
                 ForceKind::Interface if acc.share > 0.0 => f += acc.ext * (1.0 / acc.share),
+                ForceKind::TripleJunction
+                    if acc.share > 0.0 && s.junction == JunctionForce::EdgeLocal =>
+                {
+                    f += acc.ext * (1.0 / acc.share)
+                }
                 ForceKind::TripleJunction if acc.share > 0.0 => {
                     for sl in 0..acc.np {
                         let n = acc.normal[sl];

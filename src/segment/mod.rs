@@ -29,6 +29,7 @@ pub use driver::{IterationRecord, SegmentReport, Segmentation, StageTimes, StopR
 pub use error::SegmentError;
 pub use image::ImageView;
 pub use params::{
-    default_edge_length, ForceModel, Init, InitBall, InitDisk, SegmentParams, MAX_PHASES,
+    default_edge_length, ForceModel, Init, InitBall, InitDisk, JunctionForce, SegmentParams,
+    MAX_PHASES,
 };
 pub use raster::Raster;
