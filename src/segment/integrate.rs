@@ -43,15 +43,29 @@ pub fn integrate_cells<K: Raster>(
             return;
         }
         let pts = complex.cell_points(c);
-        let mut acc = CellStats::default();
-        K::cell_pixels(image, &pts[..K::NV], &mut |p| {
-            let v = image.data[p] as f64;
-            acc.sum += v;
-            acc.sum_sq += v * v;
-            acc.count += 1;
-        });
-        *s = acc;
+        *s = cell_stats::<K>(image, &pts[..K::NV]);
     });
+}
+
+/// The statistics of the pixels whose centre lies in the cell with the given
+/// corners: row spans summed as contiguous slices, in increasing pixel order
+/// (so the sums are bit-identical to a pixel-by-pixel loop).
+#[inline]
+pub fn cell_stats<K: Raster>(image: &ImageView<'_>, corners: &[K::Point]) -> CellStats {
+    let (mut sum, mut sum_sq, mut count) = (0.0f64, 0.0f64, 0usize);
+    K::cell_spans(image, corners, &mut |a, b| {
+        for &v in &image.data[a..b] {
+            let v = v as f64;
+            sum += v;
+            sum_sq += v * v;
+        }
+        count += b - a;
+    });
+    CellStats {
+        sum,
+        sum_sq,
+        count: count as u32,
+    }
 }
 
 /// Per-phase totals and means.
