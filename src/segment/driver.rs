@@ -333,7 +333,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let t = Instant::now();
         if !self.dest.is_empty() {
             self.complex.deform(&self.dest, &self.dsc);
-            self.dest = Destinations::new(&self.complex);
+            // Reused: cleared before it is filled (and grown by `set`).
         }
         self.times.deform += t.elapsed().as_secs_f64();
 
