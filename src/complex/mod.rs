@@ -37,6 +37,10 @@ pub struct Complex<K: Dim> {
     live_vertices: usize,
     domain_min: K::Point,
     domain_max: K::Point,
+    /// How many times [`Complex::compact`] renumbered the complex.
+    compactions: u64,
+    /// The old-to-new cell map of the last compaction.
+    last_cell_map: Vec<Option<CellId>>,
 }
 
 /// A triangle complex.
@@ -283,6 +287,20 @@ impl<K: Dim> Complex<K> {
             .collect();
         self.labels = keep_c.iter().map(|&i| self.labels[i]).collect();
         self.alive = vec![true; keep_c.len()];
+        self.last_cell_map.clone_from(&cmap);
+        self.compactions += 1;
         (vmap, cmap)
+    }
+
+    /// How many times [`Complex::compact`] has renumbered this complex (lets
+    /// per-cell caches follow the renumbering, see [`Complex::last_cell_map`]).
+    pub fn compactions(&self) -> u64 {
+        self.compactions
+    }
+
+    /// The old-to-new cell map of the last [`Complex::compact`] (empty before
+    /// the first).
+    pub fn last_cell_map(&self) -> &[Option<CellId>] {
+        &self.last_cell_map
     }
 }

@@ -64,6 +64,11 @@ pub struct CellCache<K: Dim> {
     corners: Vec<Option<[K::Point; 4]>>,
     /// The image the cache was filled from (address and length).
     image: (usize, usize),
+    /// [`Complex::compactions`] at the last call.
+    generation: u64,
+    /// Scratch for renumbering.
+    spare_corners: Vec<Option<[K::Point; 4]>>,
+    spare_stats: Vec<CellStats>,
 }
 
 impl<K: Raster> Default for CellCache<K> {
@@ -78,6 +83,9 @@ impl<K: Raster> CellCache<K> {
         CellCache {
             corners: Vec::new(),
             image: (0, 0),
+            generation: 0,
+            spare_corners: Vec::new(),
+            spare_stats: Vec::new(),
         }
     }
 
@@ -94,11 +102,34 @@ impl<K: Raster> CellCache<K> {
     ) -> usize {
         let key = (image.data.as_ptr() as usize, image.data.len());
         let cap = complex.cell_capacity();
-        if key != self.image || out.len() != self.corners.len() {
+        let generation = complex.compactions();
+        if key != self.image
+            || out.len() != self.corners.len()
+            || generation < self.generation
+            || generation > self.generation + 1
+        {
             self.corners.clear();
             out.clear();
             self.image = key;
+        } else if generation == self.generation + 1 {
+            // One compaction since the last call: carry every cached cell to
+            // its new id (whatever it holds there is checked below anyway).
+            let map = complex.last_cell_map();
+            let n = map.iter().flatten().count();
+            self.spare_corners.clear();
+            self.spare_corners.resize(n, None);
+            self.spare_stats.clear();
+            self.spare_stats.resize(n, CellStats::default());
+            for (old, new) in map.iter().enumerate().take(self.corners.len()) {
+                if let Some(new) = new {
+                    self.spare_corners[new.index()] = self.corners[old];
+                    self.spare_stats[new.index()] = out[old];
+                }
+            }
+            std::mem::swap(&mut self.corners, &mut self.spare_corners);
+            std::mem::swap(out, &mut self.spare_stats);
         }
+        self.generation = generation;
         out.resize(cap, CellStats::default());
         self.corners.resize(cap, None);
         out.par_iter_mut()
