@@ -143,6 +143,7 @@ impl<K: Dim> Complex<K> {
             domain_max: max,
             compactions: 0,
             last_cell_map: Vec::new(),
+            last_vertex_map: Vec::new(),
         };
         complex.reclassify_all();
         Ok(complex)
