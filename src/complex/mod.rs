@@ -271,8 +271,8 @@ impl<K: Dim> Complex<K> {
             }
         }
         // Forward copies: the new index never exceeds the old one.
-        for i in 0..vmap.len() {
-            if let Some(new) = vmap[i] {
+        for (i, new) in vmap.iter().enumerate() {
+            if let Some(new) = *new {
                 let k = new.index();
                 self.positions[k] = self.positions[i];
                 self.classes[k] = self.classes[i];
@@ -282,8 +282,8 @@ impl<K: Dim> Complex<K> {
         self.positions.truncate(n as usize);
         self.classes.truncate(n as usize);
         self.vertex_cell.truncate(n as usize);
-        for i in 0..cmap.len() {
-            if let Some(new) = cmap[i] {
+        for (i, new) in cmap.iter().enumerate() {
+            if let Some(new) = *new {
                 let k = new.index();
                 let mut cell = self.cells[i];
                 for v in cell.as_mut() {

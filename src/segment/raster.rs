@@ -217,6 +217,9 @@ impl Raster for D2 {
     }
 }
 
+/// The dimension's point type, for generic code that names it.
+pub type PointOf<K> = <K as Dim>::Point;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -325,6 +328,3 @@ mod tests {
         }
     }
 }
-
-/// The dimension's point type, for generic code that names it.
-pub type PointOf<K> = <K as Dim>::Point;
