@@ -6,7 +6,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use dsc_seg::complex::Complex;
 use dsc_seg::dim::D2;
 use dsc_seg::phantom::shapes2d;
-use dsc_seg::segment::integrate::integrate_cells;
+use dsc_seg::segment::integrate::{integrate_cells, CellCache};
 use dsc_seg::segment::{default_edge_length, ImageView, SegmentParams, Segmentation};
 use std::hint::black_box;
 
@@ -30,6 +30,13 @@ fn statistics(c: &mut Criterion) {
     });
     group.bench_function("integrate_cells", |b| {
         b.iter(|| integrate_cells(&mesh, &image, &mut cells))
+    });
+    // The steady state of the cache: nothing moved, every cell is compared
+    // and none integrated (the bound for the cells away from the interface).
+    let mut cache = CellCache::<D2>::new();
+    cache.integrate(&mesh, &image, &mut cells);
+    group.bench_function("cached_unchanged", |b| {
+        b.iter(|| cache.integrate(&mesh, &image, &mut cells))
     });
     group.finish();
 }

@@ -141,6 +141,9 @@ impl<K: Dim> Complex<K> {
             live_vertices,
             domain_min: min,
             domain_max: max,
+            compactions: 0,
+            last_cell_map: Vec::new(),
+            last_vertex_map: Vec::new(),
         };
         complex.reclassify_all();
         Ok(complex)

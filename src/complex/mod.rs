@@ -38,6 +38,12 @@ pub struct Complex<K: Dim> {
     live_vertices: usize,
     domain_min: K::Point,
     domain_max: K::Point,
+    /// How many times [`Complex::compact`] renumbered the complex.
+    compactions: u64,
+    /// The old-to-new cell map of the last compaction.
+    last_cell_map: Vec<Option<CellId>>,
+    /// The old-to-new vertex map of the last compaction.
+    last_vertex_map: Vec<Option<VertexId>>,
 }
 
 /// A triangle complex.
@@ -236,7 +242,19 @@ impl<K: Dim> Complex<K> {
     /// Removes dead vertices and cells and renumbers the rest densely, returning
     /// the old-to-new vertex and cell maps. Invalidates every id held outside.
     pub fn compact(&mut self) -> (Vec<Option<VertexId>>, Vec<Option<CellId>>) {
-        let mut vmap = vec![None; self.positions.len()];
+        self.compact_in_place();
+        (self.last_vertex_map.clone(), self.last_cell_map.clone())
+    }
+
+    /// [`Complex::compact`] without allocating: the arrays are compacted in
+    /// place (live entries keep their relative order, exactly as `compact`
+    /// numbers them) and the maps are kept in [`Complex::last_cell_map`] and
+    /// [`Complex::last_vertex_map`]. The deform loop calls this every iteration.
+    pub fn compact_in_place(&mut self) {
+        let mut vmap = std::mem::take(&mut self.last_vertex_map);
+        let mut cmap = std::mem::take(&mut self.last_cell_map);
+        vmap.clear();
+        vmap.resize(self.positions.len(), None);
         let mut n = 0u32;
         for (i, slot) in vmap.iter_mut().enumerate() {
             if self.vertex_cell[i].is_some() {
@@ -244,7 +262,8 @@ impl<K: Dim> Complex<K> {
                 n += 1;
             }
         }
-        let mut cmap = vec![None; self.cells.len()];
+        cmap.clear();
+        cmap.resize(self.cells.len(), None);
         let mut m = 0u32;
         for (i, slot) in cmap.iter_mut().enumerate() {
             if self.alive[i] {
@@ -252,38 +271,59 @@ impl<K: Dim> Complex<K> {
                 m += 1;
             }
         }
-        let keep_v: Vec<usize> = (0..self.positions.len())
-            .filter(|&i| vmap[i].is_some())
-            .collect();
-        self.positions = keep_v.iter().map(|&i| self.positions[i]).collect();
-        self.classes = keep_v.iter().map(|&i| self.classes[i]).collect();
-        self.vertex_cell = keep_v
-            .iter()
-            .map(|&i| self.vertex_cell[i].and_then(|c| cmap[c.index()]))
-            .collect();
-        let keep_c: Vec<usize> = (0..self.cells.len()).filter(|&i| self.alive[i]).collect();
-        self.cells = keep_c
-            .iter()
-            .map(|&i| {
+        // Forward copies: the new index never exceeds the old one.
+        for (i, new) in vmap.iter().enumerate() {
+            if let Some(new) = *new {
+                let k = new.index();
+                self.positions[k] = self.positions[i];
+                self.classes[k] = self.classes[i];
+                self.vertex_cell[k] = self.vertex_cell[i].and_then(|c| cmap[c.index()]);
+            }
+        }
+        self.positions.truncate(n as usize);
+        self.classes.truncate(n as usize);
+        self.vertex_cell.truncate(n as usize);
+        for (i, new) in cmap.iter().enumerate() {
+            if let Some(new) = *new {
+                let k = new.index();
                 let mut cell = self.cells[i];
                 for v in cell.as_mut() {
                     *v = vmap[v.index()].expect("live cell references a live vertex");
                 }
-                cell
-            })
-            .collect();
-        self.neighbours = keep_c
-            .iter()
-            .map(|&i| {
+                self.cells[k] = cell;
                 let mut nb = self.neighbours[i];
-                for n in nb.as_mut() {
-                    *n = n.and_then(|c| cmap[c.index()]);
+                for c in nb.as_mut() {
+                    *c = c.and_then(|c| cmap[c.index()]);
                 }
-                nb
-            })
-            .collect();
-        self.labels = keep_c.iter().map(|&i| self.labels[i]).collect();
-        self.alive = vec![true; keep_c.len()];
-        (vmap, cmap)
+                self.neighbours[k] = nb;
+                self.labels[k] = self.labels[i];
+            }
+        }
+        self.cells.truncate(m as usize);
+        self.neighbours.truncate(m as usize);
+        self.labels.truncate(m as usize);
+        self.alive.clear();
+        self.alive.resize(m as usize, true);
+        self.last_vertex_map = vmap;
+        self.last_cell_map = cmap;
+        self.compactions += 1;
+    }
+
+    /// The old-to-new vertex map of the last [`Complex::compact`] (empty
+    /// before the first).
+    pub fn last_vertex_map(&self) -> &[Option<VertexId>] {
+        &self.last_vertex_map
+    }
+
+    /// How many times [`Complex::compact`] has renumbered this complex (lets
+    /// per-cell caches follow the renumbering, see [`Complex::last_cell_map`]).
+    pub fn compactions(&self) -> u64 {
+        self.compactions
+    }
+
+    /// The old-to-new cell map of the last [`Complex::compact`] (empty before
+    /// the first).
+    pub fn last_cell_map(&self) -> &[Option<CellId>] {
+        &self.last_cell_map
     }
 }

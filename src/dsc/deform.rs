@@ -105,7 +105,7 @@ impl<K: Connectivity> Complex<K> {
         report.resize = self.resize(params, &mut touched);
         touched.retain(|&v| self.is_vertex_alive(v));
         add(&mut report.improve, self.improve_near(&touched, params));
-        self.compact();
+        self.compact_in_place();
         report
     }
 }

@@ -5,7 +5,7 @@ use super::flips::Flipper;
 use super::forces::{ForceField, ForceSettings};
 use super::image::ImageView;
 use super::init::initialise;
-use super::integrate::{integrate_cells, CellStats, PhaseStats};
+use super::integrate::{integrate_cells, CellCache, CellStats, PhaseStats};
 use super::params::{ForceModel, SegmentParams};
 use super::raster::Raster;
 use crate::complex::{Complex, VertexId};
@@ -104,6 +104,8 @@ pub struct Segmentation<'a, K: Raster> {
     dsc: DscParams,
     complex: Complex<K>,
     cells: Vec<CellStats>,
+    /// Keeps the statistics of cells that did not move between iterations.
+    cell_cache: CellCache<K>,
     phases: PhaseStats,
     forces: ForceField<K>,
     flipper: Flipper,
@@ -161,6 +163,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             dsc,
             complex,
             cells,
+            cell_cache: CellCache::new(),
             phases,
             forces: ForceField::new(),
             flipper: Flipper::new(),
@@ -235,7 +238,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
 
     fn integrate(&mut self) {
         let t = Instant::now();
-        integrate_cells(&self.complex, &self.image, &mut self.cells);
+        self.cell_cache
+            .integrate(&self.complex, &self.image, &mut self.cells);
         self.phases.update(&self.complex, &self.cells);
         self.times.integrate += t.elapsed().as_secs_f64();
     }
@@ -334,7 +338,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let t = Instant::now();
         if !self.dest.is_empty() {
             self.complex.deform(&self.dest, &self.dsc);
-            self.dest = Destinations::new(&self.complex);
+            // Reused: cleared before it is filled (and grown by `set`).
         }
         self.times.deform += t.elapsed().as_secs_f64();
 

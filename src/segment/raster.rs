@@ -17,9 +17,24 @@ use nalgebra::{Vector2, Vector3};
 /// domain, every pixel/voxel is visited by exactly one cell (centre rule with
 /// half-open boundaries computed identically by the two cells sharing a facet).
 pub trait Raster: Connectivity {
+    /// Calls `visit(start, end)` for every run of pixels/voxels whose centres
+    /// lie in the cell with the given `NV` corners: the linear indices
+    /// `start..end` are contiguous in memory (one image row, or part of one),
+    /// so callers can sum slices `&data[start..end]` in a tight loop. Runs are
+    /// non-empty and come in increasing index order.
+    fn cell_spans(
+        image: &ImageView<'_>,
+        corners: &[Self::Point],
+        visit: &mut impl FnMut(usize, usize),
+    );
+
     /// Calls `visit(index)` for the linear index of every pixel/voxel whose
-    /// centre lies in the cell with the given `NV` corners.
-    fn cell_pixels(image: &ImageView<'_>, corners: &[Self::Point], visit: &mut impl FnMut(usize));
+    /// centre lies in the cell with the given `NV` corners (in increasing
+    /// order; the pixels of [`Raster::cell_spans`] one by one).
+    #[inline]
+    fn cell_pixels(image: &ImageView<'_>, corners: &[Self::Point], visit: &mut impl FnMut(usize)) {
+        Self::cell_spans(image, corners, &mut |a, b| (a..b).for_each(&mut *visit));
+    }
 
     /// Samples the facet with the given `N` corners about every `spacing`
     /// units: calls `visit(point, weights, measure)` where `weights` are the
@@ -43,10 +58,25 @@ pub trait Raster: Connectivity {
     fn box_complex(image: &ImageView<'_>, l: f64) -> Result<Complex<Self>, BuildError>;
 }
 
-/// The x where the edge `a`–`b` crosses the line `y = yc`, computed from the
+/// `x.ceil() as i64` without a call to libm's `ceil` (the baseline x86-64
+/// target has no `roundsd`, so `f64::ceil` is a function call per row): the
+/// same integer for every `x`, NaN (0) and out-of-range values (saturated)
+/// included.
+#[inline(always)]
+fn ceil_i64(x: f64) -> i64 {
+    let t = x as i64; // truncates toward zero, saturating; NaN -> 0
+    if (t as f64) < x {
+        t.saturating_add(1)
+    } else {
+        t
+    }
+}
+
+/// The reference (kept for the tests; [`RowEdge`] does the same arithmetic):
+/// the x where the edge `a`–`b` crosses the line `y = yc`, computed from the
 /// edge's endpoints in a canonical order so that the two triangles sharing the
 /// edge get bit-identical results.
-#[inline]
+#[cfg(test)]
 fn edge_x(a: Vector2<f64>, b: Vector2<f64>, yc: f64) -> f64 {
     let (p, q) = if (a.y, a.x) <= (b.y, b.x) {
         (a, b)
@@ -56,45 +86,92 @@ fn edge_x(a: Vector2<f64>, b: Vector2<f64>, yc: f64) -> f64 {
     p.x + (yc - p.y) * (q.x - p.x) / (q.y - p.y)
 }
 
+/// An edge prepared for `edge_x`-identical crossings: endpoints in the
+/// canonical order, differences computed once.
+#[derive(Clone, Copy)]
+struct RowEdge {
+    px: f64,
+    py: f64,
+    dx: f64,
+    dy: f64,
+}
+
+impl RowEdge {
+    #[inline(always)]
+    fn new(a: Vector2<f64>, b: Vector2<f64>) -> Self {
+        let (p, q) = if (a.y, a.x) <= (b.y, b.x) {
+            (a, b)
+        } else {
+            (b, a)
+        };
+        RowEdge {
+            px: p.x,
+            py: p.y,
+            dx: q.x - p.x,
+            dy: q.y - p.y,
+        }
+    }
+
+    /// Same operations, in the same order, as `edge_x`.
+    #[inline(always)]
+    fn x(&self, yc: f64) -> f64 {
+        self.px + (yc - self.py) * self.dx / self.dy
+    }
+}
+
 impl Raster for D2 {
     /// Pixel-centre rule by scanlines: row `j` (centre `yc = j + 0.5`) meets
     /// the triangle if `ymin <= yc < ymax`; an edge is active on the row when
     /// `ylo <= yc < yhi` (exactly two edges are then); the pixels with centre
     /// in `[xl, xr)` belong to the triangle. Shared edges give identical `x`,
     /// so each pixel is counted exactly once over a tiling.
-    fn cell_pixels(image: &ImageView<'_>, c: &[Vector2<f64>], visit: &mut impl FnMut(usize)) {
+    ///
+    /// The three edges are prepared once per triangle (corners sorted by
+    /// `y`: the long edge is active on every row, the lower short edge below
+    /// the middle corner, the upper one from it on), and each row is one
+    /// contiguous span. The arithmetic per edge and row is exactly
+    /// `edge_x`'s, so the result is bit-identical to testing the three
+    /// edges on every row.
+    fn cell_spans(image: &ImageView<'_>, c: &[Vector2<f64>], visit: &mut impl FnMut(usize, usize)) {
         let (w, h) = (image.dims[0] as i64, image.dims[1] as i64);
-        let ymin = c[0].y.min(c[1].y).min(c[2].y);
-        let ymax = c[0].y.max(c[1].y).max(c[2].y);
-        let j0 = ((ymin - 0.5).ceil() as i64).max(0);
-        let j1 = ((ymax - 0.5).ceil() as i64).min(h); // exclusive
+        // Corners sorted by y (ties in any order: an edge with equal end
+        // heights is never active, as the half-open test makes it).
+        let (mut a, mut b, mut t) = (c[0], c[1], c[2]);
+        if b.y < a.y {
+            std::mem::swap(&mut a, &mut b);
+        }
+        if t.y < b.y {
+            std::mem::swap(&mut b, &mut t);
+            if b.y < a.y {
+                std::mem::swap(&mut a, &mut b);
+            }
+        }
+        let (ymin, ymid, ymax) = (a.y, b.y, t.y);
+        let j0 = ceil_i64(ymin - 0.5).max(0);
+        let j1 = ceil_i64(ymax - 0.5).min(h); // exclusive
+        if j0 >= j1 {
+            return;
+        }
+        let long = RowEdge::new(a, t);
+        let lower = RowEdge::new(a, b);
+        let upper = RowEdge::new(b, t);
+        let mut row = j0 * w;
         for j in j0..j1 {
             let yc = j as f64 + 0.5;
-            let mut xs = [0.0f64; 2];
-            let mut n = 0;
-            for e in 0..3 {
-                let a = c[e];
-                let b = c[(e + 1) % 3];
-                let (lo, hi) = if a.y <= b.y { (a.y, b.y) } else { (b.y, a.y) };
-                if lo <= yc && yc < hi && n < 2 {
-                    xs[n] = edge_x(a, b, yc);
-                    n += 1;
+            // Active edges on the row (`lo <= yc < hi`): the long edge on
+            // [ymin, ymax), the lower short one on [ymin, ymid), the upper
+            // one on [ymid, ymax) -- exactly two on every row of the range.
+            if ymin <= yc && yc < ymax {
+                let x0 = long.x(yc);
+                let x1 = if yc < ymid { lower.x(yc) } else { upper.x(yc) };
+                let (xl, xr) = if x0 <= x1 { (x0, x1) } else { (x1, x0) };
+                let i0 = ceil_i64(xl - 0.5).max(0);
+                let i1 = ceil_i64(xr - 0.5).min(w);
+                if i0 < i1 {
+                    visit((row + i0) as usize, (row + i1) as usize);
                 }
             }
-            if n < 2 {
-                continue;
-            }
-            let (xl, xr) = if xs[0] <= xs[1] {
-                (xs[0], xs[1])
-            } else {
-                (xs[1], xs[0])
-            };
-            let i0 = ((xl - 0.5).ceil() as i64).max(0);
-            let i1 = ((xr - 0.5).ceil() as i64).min(w);
-            let row = j * w;
-            for i in i0..i1 {
-                visit((row + i) as usize);
-            }
+            row += w;
         }
     }
 
@@ -146,10 +223,13 @@ impl Raster for D3 {
     /// Voxel-centre rule with ties broken by simulation of simplicity
     /// ([`tet_voxels`](super::voxel3d::tet_voxels)): each voxel of a tiling is
     /// visited exactly once, whatever lies on shared facets, edges or vertices.
-    fn cell_pixels(image: &ImageView<'_>, c: &[Vector3<f64>], visit: &mut impl FnMut(usize)) {
+    fn cell_spans(image: &ImageView<'_>, c: &[Vector3<f64>], visit: &mut impl FnMut(usize, usize)) {
         let [nx, ny, _] = image.dims;
         let t = [c[0], c[1], c[2], c[3]];
-        super::voxel3d::tet_voxels(&t, image.dims, |i, j, k| visit(i + nx * (j + ny * k)));
+        super::voxel3d::tet_voxels(&t, image.dims, |i, j, k| {
+            let index = i + nx * (j + ny * k);
+            visit(index, index + 1)
+        });
     }
 
     /// Degree-2 Gaussian quadrature on about `spacing²`-sized sub-triangles
@@ -209,5 +289,114 @@ impl Raster for D3 {
 
     fn box_complex(image: &ImageView<'_>, l: f64) -> Result<Complex<D3>, BuildError> {
         Complex::cuboid(image.dims.map(|d| d as f64), l)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ceil_i64_matches_ceil() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            1e-300,
+            -1e-300,
+            2.5,
+            -2.5,
+            1e15 + 0.5,
+            9.1e18,
+            9.3e18,
+            -9.3e18,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        let mut s = 0x9e3779b97f4a7c15u64;
+        for _ in 0..100_000 {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            xs.push((s >> 11) as f64 / (1u64 << 53) as f64 * 4096.0 - 2048.0);
+        }
+        for k in -100..100 {
+            let k = k as f64 * 0.5;
+            xs.extend([k, k - 1e-12, k + 1e-12]);
+        }
+        for x in xs {
+            assert_eq!(ceil_i64(x), x.ceil() as i64, "{x}");
+        }
+    }
+
+    /// The reference: every row tests the three edges (the rasteriser
+    /// before the spans), one pixel at a time.
+    fn reference(w: i64, h: i64, c: &[Vector2<f64>]) -> Vec<usize> {
+        let mut out = Vec::new();
+        let ymin = c[0].y.min(c[1].y).min(c[2].y);
+        let ymax = c[0].y.max(c[1].y).max(c[2].y);
+        let j0 = ((ymin - 0.5).ceil() as i64).max(0);
+        let j1 = ((ymax - 0.5).ceil() as i64).min(h);
+        for j in j0..j1 {
+            let yc = j as f64 + 0.5;
+            let mut xs = [0.0f64; 2];
+            let mut n = 0;
+            for e in 0..3 {
+                let (a, b) = (c[e], c[(e + 1) % 3]);
+                let (lo, hi) = if a.y <= b.y { (a.y, b.y) } else { (b.y, a.y) };
+                if lo <= yc && yc < hi && n < 2 {
+                    xs[n] = edge_x(a, b, yc);
+                    n += 1;
+                }
+            }
+            if n < 2 {
+                continue;
+            }
+            let (xl, xr) = if xs[0] <= xs[1] {
+                (xs[0], xs[1])
+            } else {
+                (xs[1], xs[0])
+            };
+            let i0 = ((xl - 0.5).ceil() as i64).max(0);
+            let i1 = ((xr - 0.5).ceil() as i64).min(w);
+            for i in i0..i1 {
+                out.push((j * w + i) as usize);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn spans_match_the_three_edge_scanline() {
+        let (w, h) = (37usize, 29usize);
+        let data = vec![0.0f32; w * h];
+        let image = ImageView::new_2d(w, h, &data).unwrap();
+        let mut s = 0x2545f4914f6cdd1du64;
+        let mut rnd = |scale: f64| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            let r = (s >> 11) as f64 / (1u64 << 53) as f64 * scale - 0.1 * scale;
+            // Half of the coordinates on the pixel-centre and pixel-edge grid.
+            if s & 1 == 0 {
+                (r * 2.0).round() / 2.0
+            } else {
+                r
+            }
+        };
+        for _ in 0..20_000 {
+            let c: Vec<Vector2<f64>> = (0..3)
+                .map(|_| Vector2::new(rnd(w as f64 * 1.2), rnd(h as f64 * 1.2)))
+                .collect();
+            let mut got = Vec::new();
+            <D2 as Raster>::cell_pixels(&image, &c, &mut |p| got.push(p));
+            assert_eq!(got, reference(w as i64, h as i64, &c), "{c:?}");
+        }
     }
 }
