@@ -5,6 +5,7 @@ mod common;
 mod determinism;
 mod dsc2d;
 mod figures;
+mod forces;
 mod generic;
 mod prop2d;
 mod segment2d;

@@ -1,0 +1,80 @@
+//! The three example forces of issue 8 (balloon, edge attraction, volcano):
+//! each test runs the example's own scenario and asserts its outcome.
+
+use dsc_seg::pipeline::mean_dice;
+use dsc_seg::segment::StopReason;
+
+#[allow(dead_code)]
+#[path = "../../examples/balloon.rs"]
+mod balloon;
+#[allow(dead_code)]
+#[path = "../../examples/edge_snake.rs"]
+mod edge_snake;
+#[allow(dead_code)]
+#[path = "../../examples/volcano.rs"]
+mod volcano;
+
+/// A seed disk in the trunk inflates, splits around the ring's hole, merges
+/// at the top and stops at the object's edges.
+#[test]
+fn balloon_inflates_a_seed_to_the_object() {
+    let n = 128;
+    let o = balloon::scenario(n, None).unwrap();
+    let ph = &o.phantom;
+    let seed = mean_dice(&o.initial, &ph.truth, 2);
+    let dice = mean_dice(&o.labels, &ph.truth, 2);
+    assert!(seed < 0.6, "seed Dice {seed}");
+    assert!(dice > 0.97, "final Dice {dice}");
+    assert_eq!(o.report.stop_reason, StopReason::Converged);
+    assert_eq!(o.components, 1, "the branches merged into one region");
+    // the ring's hole stays background: the balloon did not leak through the edge
+    let hole = (0.40 * n as f64) as usize * n + n / 2;
+    assert_eq!(o.labels[hole], 0);
+    let area = |l: &[u8]| l.iter().filter(|&&v| v == 1).count();
+    assert!(area(&o.labels) > 5 * area(&o.initial));
+}
+
+/// An outline 3 px too large snaps onto the edges of every shape.
+#[test]
+fn edge_force_pulls_the_outline_onto_the_edges() {
+    let o = edge_snake::scenario(256, None).unwrap();
+    let ph = &o.phantom;
+    let before = mean_dice(&o.initial, &ph.truth, 2);
+    let after = mean_dice(&o.labels, &ph.truth, 2);
+    assert!(before < 0.92, "initial Dice {before}");
+    assert!(after > 0.985, "final Dice {after}");
+    assert_eq!(o.report.stop_reason, StopReason::Converged);
+}
+
+/// After convergence, a volcano outside the ring dents it locally and leaves
+/// the rest of the segmentation alone.
+#[test]
+fn volcano_dents_the_interface_near_it_only() {
+    let n = 128;
+    let o = volcano::scenario(n, None).unwrap();
+    assert!(o.erupted_at > 0, "the pipeline converged before the eruption");
+    assert_eq!(o.report.stop_reason, StopReason::Converged);
+    assert!(o.report.iterations > o.erupted_at);
+    let (cx, cy) = o.centre;
+    let at = |x: f64, y: f64| y as usize * n + x as usize;
+    // 3 px inside the ring's edge (5 px from the volcano) on the volcano's
+    // axis: object before, background after (measured: the dent is ~5 px deep)
+    let p = at(cx - 8.0, cy);
+    assert_eq!(o.before[p], 1, "object before the eruption");
+    assert_eq!(o.after[p], 0, "dented by the volcano");
+    // far from the volcano (beyond 3ρ = 24 px) only the noise-level jitter
+    // of a further relaxation (flips off): under 1% of the object's area
+    let far = |i: usize| {
+        let (x, y) = ((i % n) as f64 + 0.5, (i / n) as f64 + 0.5);
+        (x - cx).hypot(y - cy) > 24.0
+    };
+    let changed = |i: &usize| o.before[*i] != o.after[*i];
+    let far_changes = (0..n * n).filter(|&i| far(i)).filter(changed).count();
+    let near_changes = (0..n * n).filter(|&i| !far(i)).filter(changed).count();
+    let object = o.before.iter().filter(|&&v| v == 1).count();
+    eprintln!("volcano: {near_changes} pixels changed near, {far_changes} far, object {object}");
+    assert!(100 * far_changes < object, "{far_changes} pixels changed far away");
+    assert!(near_changes >= 40, "a dent of {near_changes} pixels");
+    let ph = &o.phantom;
+    assert!(mean_dice(&o.before, &ph.truth, 2) > 0.97);
+}
