@@ -94,7 +94,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(&out)?;
     let (p0, p1) = (out.join("volcano_before.png"), out.join("volcano.png"));
     let o = scenario(128, Some((&p0, &p1)))?;
-    let changed = o.before.iter().zip(&o.after).filter(|(a, b)| a != b).count();
+    let changed = o
+        .before
+        .iter()
+        .zip(&o.after)
+        .filter(|(a, b)| a != b)
+        .count();
     println!(
         "volcano: erupted at iteration {}, stopped at {} ({:?}); {} pixels changed; -> {}, {}",
         o.erupted_at,

@@ -407,11 +407,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         // coefficient (dt·β/L) is capped at a stable value: for the bending
         // term the highest-frequency mode changes by a factor 1 − 4k per
         // step, so k ≤ 0.2 (and k ≤ 0.5 for the umbrella of the elasticity).
-        let fmax = self
-            .external
-            .iter()
-            .map(|f| f.length())
-            .fold(0.0, f64::max);
+        let fmax = self.external.iter().map(|f| f.length()).fold(0.0, f64::max);
         let denom = fmax.max(reference.unwrap_or(1.0));
         let scale = self.step * l / if denom > 0.0 { denom } else { 1.0 };
         // (buffer index, coefficient) of the smoothing terms

@@ -13,13 +13,13 @@
 //!    complex with the DSC.
 //!
 //! The paper's own evolution is written against these traits: the region
-//! force of eqs. (5)–(7) is [`RegionForce`](super::models::RegionForce), the
+//! force of eqs. (5)–(7) is [`RegionForce`], the
 //! rigidity and elasticity terms of eq. (2) are
-//! [`Rigidity`](super::models::Rigidity) and
-//! [`Elasticity`](super::models::Elasticity), the label flips are
-//! [`CellFlips`](super::models::CellFlips) and
-//! [`ComponentFlips`](super::models::ComponentFlips), and the initialisation
-//! from [`SegmentParams::init`] is [`ParamsInit`](super::models::ParamsInit).
+//! [`Rigidity`] and
+//! [`Elasticity`], the label flips are
+//! [`CellFlips`] and
+//! [`ComponentFlips`], and the initialisation
+//! from [`SegmentParams::init`] is [`ParamsInit`].
 //! [`Models::paper`] bundles them; [`Segmentation::new`](super::Segmentation::new)
 //! uses it.
 
@@ -27,9 +27,7 @@ use super::error::SegmentError;
 use super::forces::ForceField;
 use super::image::ImageView;
 use super::integrate::{CellStats, PhaseStats};
-use super::models::{
-    CellFlips, ComponentFlips, Elasticity, ParamsInit, RegionForce, Rigidity,
-};
+use super::models::{CellFlips, ComponentFlips, Elasticity, ParamsInit, RegionForce, Rigidity};
 use super::params::SegmentParams;
 use super::raster::Raster;
 use crate::complex::{Complex, Label};
@@ -240,8 +238,10 @@ pub trait Initialiser<K: Raster>: Send {
     /// Labels the cells of `ctx.complex` with values `< params.phases` and
     /// returns a starting mean per phase where one is known before
     /// integration (`None` otherwise; the driver then uses the pixels' means).
-    fn initialise(&mut self, ctx: &mut InitContext<'_, '_, K>)
-        -> Result<Vec<Option<f64>>, SegmentError>;
+    fn initialise(
+        &mut self,
+        ctx: &mut InitContext<'_, '_, K>,
+    ) -> Result<Vec<Option<f64>>, SegmentError>;
 }
 
 /// Any closure `FnMut(&mut InitContext) -> Result<…>` is an initialiser.
@@ -279,7 +279,10 @@ impl<K: Raster> Models<K> {
                 Box::new(Rigidity),
                 Box::new(Elasticity),
             ],
-            rules: vec![Box::new(CellFlips::default()), Box::new(ComponentFlips::default())],
+            rules: vec![
+                Box::new(CellFlips::default()),
+                Box::new(ComponentFlips::default()),
+            ],
             init: Box::new(ParamsInit),
         }
     }

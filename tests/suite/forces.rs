@@ -52,7 +52,10 @@ fn edge_force_pulls_the_outline_onto_the_edges() {
 fn volcano_dents_the_interface_near_it_only() {
     let n = 128;
     let o = volcano::scenario(n, None).unwrap();
-    assert!(o.erupted_at > 0, "the pipeline converged before the eruption");
+    assert!(
+        o.erupted_at > 0,
+        "the pipeline converged before the eruption"
+    );
     assert_eq!(o.report.stop_reason, StopReason::Converged);
     assert!(o.report.iterations > o.erupted_at);
     let (cx, cy) = o.centre;
@@ -73,7 +76,10 @@ fn volcano_dents_the_interface_near_it_only() {
     let near_changes = (0..n * n).filter(|&i| !far(i)).filter(changed).count();
     let object = o.before.iter().filter(|&&v| v == 1).count();
     eprintln!("volcano: {near_changes} pixels changed near, {far_changes} far, object {object}");
-    assert!(100 * far_changes < object, "{far_changes} pixels changed far away");
+    assert!(
+        100 * far_changes < object,
+        "{far_changes} pixels changed far away"
+    );
     assert!(near_changes >= 40, "a dent of {near_changes} pixels");
     let ph = &o.phantom;
     assert!(mean_dice(&o.before, &ph.truth, 2) > 0.97);

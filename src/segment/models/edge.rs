@@ -7,12 +7,12 @@
 //! once for any dimension (central differences along every axis of extent
 //! > 1, interpolation by [`Raster::sample`]).
 
+use crate::complex::VertexKind;
+use crate::dim::Point;
 use crate::phantom::blur::gaussian_blur_3d;
 use crate::segment::image::ImageView;
 use crate::segment::model::{ForceContext, ForceTerm};
 use crate::segment::raster::Raster;
-use crate::complex::VertexKind;
-use crate::dim::Point;
 use std::sync::Arc;
 
 /// The edge potential `P = |∇(G_σ ∗ I)|²` of an image (largest value 1) and
