@@ -84,3 +84,74 @@ fn volcano_dents_the_interface_near_it_only() {
     let ph = &o.phantom;
     assert!(mean_dice(&o.before, &ph.truth, 2) > 0.97);
 }
+
+/// The session loop with user-supplied pieces: a closure initialiser, a
+/// custom label rule, a custom stopping rule, parameters changed mid-run.
+#[test]
+fn custom_models_and_observer_drive_the_same_loop() {
+    use dsc_seg::dim::D2;
+    use dsc_seg::segment::{
+        Flow, ImageView, InitContext, LabelContext, LabelRule, Models, SegmentError, SegmentParams,
+        Segmentation,
+    };
+
+    /// Relabels nothing but counts its calls.
+    struct Count(usize);
+    impl LabelRule<D2> for Count {
+        fn name(&self) -> &str {
+            "count"
+        }
+        fn relabel(&mut self, _ctx: &mut LabelContext<'_, '_, D2>) -> usize {
+            self.0 += 1;
+            0
+        }
+    }
+
+    let (w, h) = (24, 24);
+    let pixels: Vec<f32> = (0..w * h)
+        .map(|i| if i % w < w / 2 { 0.2 } else { 0.8 })
+        .collect();
+    let image = ImageView::new_2d(w, h, &pixels).unwrap();
+    let right_half = |ctx: &mut InitContext<'_, '_, D2>| {
+        let mut changes = Vec::new();
+        for c in ctx.complex.cell_ids() {
+            let p = ctx.complex.cell_points(c);
+            let x = (p[0].x + p[1].x + p[2].x) / 3.0;
+            changes.push((c, u32::from(x > 12.0)));
+        }
+        ctx.complex.set_labels(&changes);
+        Ok::<_, SegmentError>(vec![None; ctx.params.phases])
+    };
+    let models = Models::empty().with_init(right_half).with_rule(Count(0));
+    let mut seg = Segmentation::<D2>::with_models(image, SegmentParams::new(2), models).unwrap();
+    let start = seg.label_image();
+    let report = seg.run_until(|s, rec| {
+        if rec.iteration == 2 {
+            s.params_mut().label_flips = false;
+        }
+        if rec.iteration == 4 {
+            Flow::Stop
+        } else {
+            Flow::Continue
+        }
+    });
+    assert_eq!(report.iterations, 4);
+    assert_eq!(report.stop_reason, StopReason::Stopped);
+    // no force: nothing moved; the rule ran while flips were on (iterations 1, 2)
+    assert_eq!(seg.label_image(), start);
+    assert_eq!(seg.models_mut().rule_mut::<Count>().unwrap().0, 2);
+    assert!(report.history.iter().all(|r| r.max_displacement == 0.0));
+
+    // an initialiser that produces a label beyond the phases is an error
+    let bad = |ctx: &mut InitContext<'_, '_, D2>| {
+        let c = ctx.complex.cell_ids().next().unwrap();
+        ctx.complex.set_label(c, 5);
+        Ok::<_, SegmentError>(Vec::new())
+    };
+    let err = Segmentation::<D2>::with_models(
+        image,
+        SegmentParams::new(2),
+        Models::paper().with_init(bad),
+    );
+    assert!(matches!(err, Err(SegmentError::Init(_))));
+}
