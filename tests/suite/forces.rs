@@ -155,3 +155,87 @@ fn custom_models_and_observer_drive_the_same_loop() {
     );
     assert!(matches!(err, Err(SegmentError::Init(_))));
 }
+
+/// The facet-integrated route reproduces the paper's region force (eq. 6)
+/// and points like the balloon's vertex normals for a constant pressure.
+#[test]
+fn facet_integrated_forces_match_the_region_force_and_the_normals() {
+    use dsc_seg::dim::{Point, D2};
+    use dsc_seg::segment::{
+        ForceContext, ForceTerm, ImageView, Models, Raster, SegmentParams, Segmentation,
+    };
+    use nalgebra::Vector2;
+    use std::sync::{Arc, Mutex};
+
+    type Seen = Arc<Mutex<Vec<(f64, f64)>>>;
+    /// Compares, at every two-phase interface vertex, eq. (6) integrated
+    /// here with the field's region force, and a unit pressure with the normals.
+    struct Probe(Seen);
+    impl ForceTerm<D2> for Probe {
+        fn name(&self) -> &str {
+            "probe"
+        }
+        fn add_forces(&mut self, ctx: &ForceContext<'_, '_, D2>, _out: &mut [Vector2<f64>]) {
+            let nv = ctx.complex.vertex_capacity();
+            let (mut eq6, mut push) = (vec![Vector2::zeros(); nv], vec![Vector2::zeros(); nv]);
+            let mut scratch = Vec::new();
+            let img = ctx.image;
+            let ph = ctx.phases;
+            ctx.add_facet_integrated(
+                |p, a, b| {
+                    let (ma, mb) = (ph.mean_of(a).unwrap(), ph.mean_of(b).unwrap());
+                    (2.0 * D2::sample(img, p) - ma - mb) / (ma - mb)
+                },
+                &mut scratch,
+                &mut eq6,
+            );
+            ctx.add_facet_integrated(
+                |_, a, _| if a == 1 { 1.0 } else { -1.0 },
+                &mut scratch,
+                &mut push,
+            );
+            let mut normals = Vec::new();
+            ctx.phase_normals(1, &mut normals);
+            let mut seen = self.0.lock().unwrap();
+            for v in ctx.complex.vertex_ids() {
+                let k = ctx.complex.class(v);
+                if k.kind != dsc_seg::complex::VertexKind::Interface || k.on_boundary() {
+                    continue;
+                }
+                let i = v.index();
+                let region = ctx.field.external[i];
+                seen.push((
+                    (eq6[i] - region).length() / region.length().max(1e-9),
+                    push[i].dot(&normals[i]) / push[i].length().max(1e-12),
+                ));
+            }
+        }
+    }
+
+    let (w, h) = (40, 40);
+    let pixels: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f64 - 19.5, (i / w) as f64 - 19.5);
+            if x.hypot(y) < 11.0 {
+                0.8
+            } else {
+                0.2
+            }
+        })
+        .collect();
+    let image = ImageView::new_2d(w, h, &pixels).unwrap();
+    let seen: Seen = Arc::default();
+    let models = Models::paper().with_force(Probe(seen.clone()));
+    let mut seg = Segmentation::<D2>::with_models(image, SegmentParams::new(2), models).unwrap();
+    seg.step();
+    seg.step();
+    let seen = seen.lock().unwrap();
+    assert!(seen.len() > 20);
+    for &(rel, cos) in seen.iter() {
+        assert!(
+            rel < 1e-9,
+            "eq. 6 integrated differs from the region force by {rel}"
+        );
+        assert!(cos > 0.9, "pressure direction vs normal: cos {cos}");
+    }
+}
