@@ -13,7 +13,7 @@ use std::hint::black_box;
 fn statistics(c: &mut Criterion) {
     let p = shapes2d::two_phase(512, 0.2, 1);
     let image = ImageView::new_2d(p.width, p.height, &p.image).unwrap();
-    let l = default_edge_length(p.width, p.height, 2);
+    let l = default_edge_length(p.width, p.height, p.phases);
     let mesh = Complex::rectangle(p.width as f64, p.height as f64, l).unwrap();
     let mut cells = Vec::new();
     let mut group = c.benchmark_group("statistics_512");

@@ -142,6 +142,34 @@ fn load_labels(path: &Path, width: usize, height: usize, phases: usize) -> Resul
     Ok(labels)
 }
 
+/// Writes a PNG of the segmentation's current mesh over `image` (the image
+/// it segments): interfaces in the phase colours, cells ordered by phase
+/// mean as in [`Segmentation::label_image`]. For examples and frame recording.
+pub fn save_overlay_png(
+    seg: &Segmentation<'_, D2>,
+    image: &Image2,
+    draw_mesh: bool,
+    path: impl AsRef<Path>,
+) -> Result<()> {
+    let order = seg.phase_order();
+    let arrays = seg.complex().to_arrays();
+    let points: Vec<[f64; 2]> = arrays.points.iter().map(|p| [p[0], p[1]]).collect();
+    let tris: Vec<[u32; 3]> = arrays
+        .connectivity
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .collect();
+    let phase: Vec<u32> = arrays
+        .labels
+        .iter()
+        .map(|&l| order[(l as usize).min(order.len() - 1)] as u32)
+        .collect();
+    Overlay::new(image, &points, &tris, &phase)
+        .with_mesh(draw_mesh)
+        .to_png(path)?;
+    Ok(())
+}
+
 /// Mean Dice over the truth's phases (labels already in the same order).
 pub fn mean_dice(pred: &[u8], truth: &[u8], phases: usize) -> f64 {
     let mut total = 0.0;

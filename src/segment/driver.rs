@@ -1,12 +1,11 @@
 //! The iteration driver: integrate, flip, compute forces, deform, check convergence.
 
 use super::error::SegmentError;
-use super::flips::Flipper;
 use super::forces::{ForceField, ForceSettings};
 use super::image::ImageView;
-use super::init::initialise;
 use super::integrate::{integrate_cells, CellCache, CellStats, PhaseStats};
-use super::params::{ForceModel, SegmentParams};
+use super::model::{Flow, ForceContext, InitContext, LabelContext, Models, TermKind};
+use super::params::SegmentParams;
 use super::raster::Raster;
 use crate::complex::{Complex, VertexId};
 use crate::dim::Point;
@@ -51,6 +50,8 @@ pub enum StopReason {
     Converged,
     /// The iteration cap was reached.
     MaxIterations,
+    /// The observer of [`Segmentation::run_until`] asked to stop.
+    Stopped,
 }
 
 /// Seconds spent in each stage of the evolution.
@@ -97,7 +98,17 @@ pub struct SegmentReport {
     pub cells: usize,
 }
 
-/// A segmentation in progress: the complex, the image and all scratch space.
+/// A segmentation in progress: the complex, the image, the models of the
+/// evolution and all scratch space.
+///
+/// One session loop for any evolution: [`step`](Self::step) runs one
+/// iteration and returns its [`IterationRecord`]; [`run`](Self::run) iterates
+/// until the built-in stopping rule or the cap; [`run_until`](Self::run_until)
+/// hands every record and the segmentation itself to an observer that may
+/// record frames ([`label_image`](Self::label_image), [`complex`](Self::complex)),
+/// change parameters ([`params_mut`](Self::params_mut)) or models
+/// ([`force_mut`](Self::force_mut), [`models_mut`](Self::models_mut)) and
+/// decide when to stop.
 pub struct Segmentation<'a, K: Raster> {
     image: ImageView<'a>,
     params: SegmentParams,
@@ -108,7 +119,11 @@ pub struct Segmentation<'a, K: Raster> {
     cell_cache: CellCache<K>,
     phases: PhaseStats,
     forces: ForceField<K>,
-    flipper: Flipper,
+    models: Models<K>,
+    /// One force buffer per force term, indexed by vertex id.
+    buffers: Vec<Vec<K::Point>>,
+    /// Sum of the external terms.
+    external: Vec<K::Point>,
     dest: Destinations<K>,
     nu: f64,
     range: (f64, f64),
@@ -122,8 +137,20 @@ pub struct Segmentation<'a, K: Raster> {
 }
 
 impl<'a, K: Raster> Segmentation<'a, K> {
-    /// Validates the input, builds the mesh at edge length L and initialises the labels.
+    /// The paper's segmentation ([`Models::paper`]): validates the input,
+    /// builds the mesh at edge length L and initialises the labels.
     pub fn new(image: ImageView<'a>, params: SegmentParams) -> Result<Self, SegmentError> {
+        Self::with_models(image, params, Models::paper())
+    }
+
+    /// A segmentation running the given models (see [`Models`]): validates the
+    /// input, builds the mesh at edge length L and initialises the labels
+    /// with `models.init`.
+    pub fn with_models(
+        image: ImageView<'a>,
+        params: SegmentParams,
+        mut models: Models<K>,
+    ) -> Result<Self, SegmentError> {
         let t0 = Instant::now();
         if image.is_empty() {
             return Err(SegmentError::EmptyImage);
@@ -149,7 +176,25 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let mut complex = K::box_complex(&image, l)?;
         let mut cells = Vec::new();
         integrate_cells(&complex, &image, &mut cells);
-        let hints = initialise(&mut complex, &image, &params, &cells, range)?;
+        let hints = models.init.initialise(&mut InitContext {
+            complex: &mut complex,
+            image: &image,
+            cells: &cells,
+            params: &params,
+            range,
+        })?;
+        if let Some(c) = complex
+            .cell_ids()
+            .find(|&c| complex.label(c) as usize >= params.phases)
+        {
+            return Err(SegmentError::Init(format!(
+                "the initialisation gave label {} but there are only {} phases",
+                complex.label(c),
+                params.phases
+            )));
+        }
+        let mut hints = hints;
+        hints.resize(params.phases, None);
         let mut phases = PhaseStats::new(params.phases);
         phases.mean = hints;
         phases.update(&complex, &cells);
@@ -166,7 +211,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             cell_cache: CellCache::new(),
             phases,
             forces: ForceField::new(),
-            flipper: Flipper::new(),
+            models,
+            buffers: Vec::new(),
+            external: Vec::new(),
             dest,
             nu: 0.0,
             range,
@@ -211,6 +258,50 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         &self.params
     }
 
+    /// The parameters, to change mid-run. Changes take effect at the next
+    /// [`step`](Self::step); the mesh and its edge length L stay as built,
+    /// and the length weight ν (from the initial means) is kept.
+    pub fn params_mut(&mut self) -> &mut SegmentParams {
+        &mut self.params
+    }
+
+    /// The models of the evolution.
+    pub fn models(&self) -> &Models<K> {
+        &self.models
+    }
+
+    /// The models, to add, remove or change terms and rules mid-run.
+    pub fn models_mut(&mut self) -> &mut Models<K> {
+        &mut self.models
+    }
+
+    /// The first force term of type `T` (e.g. to move a user's attraction
+    /// point mid-run); `None` if there is none.
+    pub fn force_mut<T: 'static>(&mut self) -> Option<&mut T> {
+        self.models.force_mut::<T>()
+    }
+
+    /// The per-cell image statistics of the last integration, indexed by cell id.
+    pub fn cell_stats(&self) -> &[CellStats] {
+        &self.cells
+    }
+
+    /// The length weight ν of the energy (intensity² per pixel of length).
+    pub fn length_weight_abs(&self) -> f64 {
+        self.nu
+    }
+
+    /// The paper's per-vertex fields (region force, bending, umbrella) from
+    /// the last iteration.
+    pub fn field(&self) -> &ForceField<K> {
+        &self.forces
+    }
+
+    /// The current step fraction (the parameter, halved when the energy stalls).
+    pub fn step_fraction(&self) -> f64 {
+        self.step
+    }
+
     /// The DSC thresholds in use.
     pub fn dsc_params(&self) -> &DscParams {
         &self.dsc
@@ -253,21 +344,17 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let mut flips = 0;
         if self.params.label_flips {
             let t = Instant::now();
-            flips = self.flipper.flip(
-                &mut self.complex,
-                &self.image,
-                &self.cells,
-                &self.phases,
-                self.nu,
-                self.params.flip_guard,
-            );
-            if self.params.flip_guard {
-                flips += self.flipper.component_flips(
-                    &mut self.complex,
-                    &self.cells,
-                    &self.phases,
-                    self.nu,
-                );
+            let mut ctx = LabelContext {
+                complex: &mut self.complex,
+                image: &self.image,
+                cells: &self.cells,
+                phases: &self.phases,
+                params: &self.params,
+                length_weight: self.nu,
+                iteration,
+            };
+            for rule in &mut self.models.rules {
+                flips += rule.relabel(&mut ctx);
             }
             if flips > 0 {
                 self.phases.update(&self.complex, &self.cells);
@@ -286,6 +373,38 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.forces
             .compute(&self.complex, &self.image, &self.phases, &settings);
         let length = self.forces.interface_measure;
+        // Every term adds into its own buffer; external terms are summed.
+        let nv = self.complex.vertex_capacity();
+        let ctx = ForceContext {
+            complex: &self.complex,
+            image: &self.image,
+            phases: &self.phases,
+            cells: &self.cells,
+            params: &self.params,
+            field: &self.forces,
+            edge_length: l,
+            range: self.range,
+            iteration,
+        };
+        self.buffers.resize_with(self.models.forces.len(), Vec::new);
+        self.external.clear();
+        self.external.resize(nv, K::Point::zero());
+        let mut reference: Option<f64> = None;
+        let mut kinds = Vec::with_capacity(self.models.forces.len());
+        for (term, buf) in self.models.forces.iter_mut().zip(&mut self.buffers) {
+            buf.clear();
+            buf.resize(nv, K::Point::zero());
+            term.add_forces(&ctx, buf);
+            let kind = term.kind(ctx.params);
+            if kind == TermKind::External {
+                let r = term.reference_magnitude(&ctx);
+                reference = Some(reference.map_or(r, |x: f64| x.max(r)));
+                for (e, f) in self.external.iter_mut().zip(buf.iter()) {
+                    *e += *f;
+                }
+            }
+            kinds.push(kind);
+        }
         // Step: the largest external displacement is `step`·L once a force
         // reaches the reference magnitude (1 for eq. 6: a pixel exactly at a
         // mean); weaker fields move proportionally less, so the evolution can
@@ -293,25 +412,20 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         // coefficient (dt·β/L) is capped at a stable value: for the bending
         // term the highest-frequency mode changes by a factor 1 − 4k per
         // step, so k ≤ 0.2 (and k ≤ 0.5 for the umbrella of the elasticity).
-        let reference = match self.params.force {
-            ForceModel::Normalised => 1.0,
-            ForceModel::ChanVese => {
-                let (a, b) = (
-                    self.phases.mean[0].unwrap_or(0.0),
-                    self.phases.mean[1].unwrap_or(0.0),
-                );
-                ((a - b) * (a - b)).max(1e-12)
-            }
-        };
-        let fmax = self
-            .forces
-            .external
+        let fmax = self.external.iter().map(|f| f.length()).fold(0.0, f64::max);
+        let denom = fmax.max(reference.unwrap_or(1.0));
+        let scale = self.step * l / if denom > 0.0 { denom } else { 1.0 };
+        // (buffer index, coefficient) of the smoothing terms
+        let smoothing: Vec<(usize, f64)> = kinds
             .iter()
-            .map(|f| f.length())
-            .fold(0.0, f64::max);
-        let scale = self.step * l / fmax.max(reference);
-        let k_bend = (scale * self.params.rigidity / l).min(MAX_BENDING_STEP);
-        let k_stretch = (scale * self.params.elasticity / l).min(MAX_STRETCHING_STEP);
+            .enumerate()
+            .filter_map(|(i, k)| match *k {
+                TermKind::Smoothing { weight, max_step } => {
+                    Some((i, (scale * weight / l).min(max_step)))
+                }
+                TermKind::External => None,
+            })
+            .collect();
         self.dest.clear();
         let mut max_disp: f64 = 0.0;
         for i in 0..self.complex.vertex_capacity() {
@@ -319,9 +433,10 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             if !self.complex.is_vertex_alive(v) {
                 continue;
             }
-            let d = self.forces.external[i] * scale
-                + self.forces.bending[i] * k_bend
-                + self.forces.stretching[i] * k_stretch;
+            let mut d = self.external[i] * scale;
+            for &(b, k) in &smoothing {
+                d += self.buffers[b][i] * k;
+            }
             if d == K::Point::zero() {
                 continue;
             }
@@ -379,12 +494,48 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.quiet_iterations >= self.params.converge_iterations
     }
 
-    /// Iterates until convergence or the cap; `progress` sees every record.
+    /// Iterates until the built-in stopping rule ([`converged`](Self::converged))
+    /// or the cap; `progress` sees every record.
     pub fn run(&mut self, mut progress: impl FnMut(&IterationRecord)) -> SegmentReport {
+        self.run_loop(true, |s, rec| {
+            progress(rec);
+            if s.converged() {
+                Flow::Stop
+            } else {
+                Flow::Continue
+            }
+        })
+    }
+
+    /// Iterates until `observe` returns [`Flow::Stop`] or
+    /// [`SegmentParams::max_iterations`] is reached. The built-in stopping
+    /// rule is *not* applied: call [`converged`](Self::converged) in the
+    /// observer to keep it, or replace it with your own. The observer sees
+    /// the segmentation after each step, so it may record a snapshot, change
+    /// parameters or models, and read statistics.
+    pub fn run_until(
+        &mut self,
+        observe: impl FnMut(&mut Self, &IterationRecord) -> Flow,
+    ) -> SegmentReport {
+        self.run_loop(false, observe)
+    }
+
+    /// The session loop; with `check_first` the built-in rule is tested before
+    /// the first step too.
+    fn run_loop(
+        &mut self,
+        check_first: bool,
+        mut observe: impl FnMut(&mut Self, &IterationRecord) -> Flow,
+    ) -> SegmentReport {
         let t0 = Instant::now();
-        while self.history.len() < self.params.max_iterations && !self.converged() {
+        let mut stopped = false;
+        while self.history.len() < self.params.max_iterations && !(check_first && self.converged())
+        {
             let rec = self.step();
-            progress(&rec);
+            if observe(self, &rec) == Flow::Stop {
+                stopped = true;
+                break;
+            }
         }
         self.integrate();
         let final_energy = self.data_energy() + self.nu * self.interface_measure();
@@ -396,6 +547,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             converged,
             stop_reason: if converged {
                 StopReason::Converged
+            } else if stopped {
+                StopReason::Stopped
             } else {
                 StopReason::MaxIterations
             },

@@ -10,7 +10,12 @@
 //! - [`init`]: range/interval, disk and label-image initialisations;
 //! - [`forces`]: region forces (eqs. 5–7) and rigidity (eq. 2);
 //! - [`flips`]: label flips (mean rule, pixel-dominant rule);
-//! - [`driver`]: the iteration, the Mumford–Shah energy and the stopping rule;
+//! - [`model`]: the extension points ([`ForceTerm`], [`LabelRule`],
+//!   [`Initialiser`], [`Models`]) through which a user supplies the evolution;
+//! - [`models`]: the paper's terms and rules written against them, and
+//!   examples from the deformable-model literature (balloon, edge attraction,
+//!   volcano);
+//! - [`driver`]: the session loop, the Mumford–Shah energy and the stopping rule;
 //! - [`params`] and [`error`].
 
 pub mod driver;
@@ -20,6 +25,8 @@ pub mod forces;
 pub mod image;
 pub mod init;
 pub mod integrate;
+pub mod model;
+pub mod models;
 pub mod output3d;
 pub mod params;
 pub mod raster;
@@ -28,8 +35,18 @@ pub mod voxel3d;
 pub use driver::{IterationRecord, SegmentReport, Segmentation, StageTimes, StopReason};
 pub use error::SegmentError;
 pub use image::ImageView;
+pub use integrate::{CellStats, PhaseStats};
+pub use model::{
+    phase_normals, Flow, ForceContext, ForceTerm, InitContext, Initialiser, LabelContext,
+    LabelRule, Models, TermKind,
+};
 pub use params::{
     default_edge_length, ForceModel, Init, InitBall, InitDisk, JunctionForce, SegmentParams,
     MAX_PHASES,
 };
 pub use raster::Raster;
+
+/// The 2D segmentation (triangles over pixels).
+pub type Segmentation2<'a> = Segmentation<'a, crate::dim::D2>;
+/// The 2D models of the evolution.
+pub type Models2 = Models<crate::dim::D2>;

@@ -6,6 +6,7 @@ mod determinism;
 mod dsc2d;
 mod dsc3d;
 mod figures;
+mod forces;
 mod generic;
 mod prop2d;
 mod seg3d;

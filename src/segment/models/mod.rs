@@ -1,0 +1,21 @@
+//! Force terms, label rules and initialisations written against
+//! [`crate::segment::model`].
+//!
+//! - [`paper`]: the paper's evolution (region force, rigidity, elasticity,
+//!   cell and component flips, initialisation from the parameters);
+//! - [`balloon`]: a pressure force inflating (or deflating) a phase, with an
+//!   optional edge stop (Cohen's balloons);
+//! - [`edge`]: the classical snake external force pulling the interface to
+//!   large gradients of the smoothed image (Kass et al.);
+//! - [`volcano`]: a user-placed point that repels or attracts the nearby
+//!   interface (Kass's volcano).
+
+pub mod balloon;
+pub mod edge;
+pub mod paper;
+pub mod volcano;
+
+pub use balloon::Balloon;
+pub use edge::{EdgeAttraction, EdgeMap};
+pub use paper::{CellFlips, ComponentFlips, Elasticity, ParamsInit, RegionForce, Rigidity};
+pub use volcano::Volcano;

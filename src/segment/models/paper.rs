@@ -1,0 +1,159 @@
+//! The paper's evolution as models: thin adapters over [`ForceField`],
+//! [`Flipper`] and [`initialise`], whose numerics they do not touch.
+//!
+//! [`ForceField`]: crate::segment::forces::ForceField
+
+use crate::segment::driver::{MAX_BENDING_STEP, MAX_STRETCHING_STEP};
+use crate::segment::error::SegmentError;
+use crate::segment::flips::Flipper;
+use crate::segment::init::initialise;
+use crate::segment::model::{
+    ForceContext, ForceTerm, InitContext, Initialiser, LabelContext, LabelRule, TermKind,
+};
+use crate::segment::params::{ForceModel, SegmentParams};
+use crate::segment::raster::Raster;
+
+/// The region force of eqs. (5)–(7) (the model chosen by
+/// [`SegmentParams::force`]): on a two-phase interface between phases with
+/// means `m_i`, `m_j`, the hat-weighted average along the facets of
+/// `f(I) = (2I − m_i − m_j)/(m_i − m_j)` times the normal `N_ij` (eq. 6);
+/// at triple junctions the mean-bracketing weights of eq. (7).
+///
+/// Reference magnitude 1 for eq. (6), `(m_0 − m_1)²` for Chan–Vese.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RegionForce;
+
+impl<K: Raster> ForceTerm<K> for RegionForce {
+    fn name(&self) -> &str {
+        "region"
+    }
+
+    fn reference_magnitude(&self, ctx: &ForceContext<'_, '_, K>) -> f64 {
+        match ctx.params.force {
+            ForceModel::Normalised => 1.0,
+            ForceModel::ChanVese => {
+                let (a, b) = (
+                    ctx.phases.mean[0].unwrap_or(0.0),
+                    ctx.phases.mean[1].unwrap_or(0.0),
+                );
+                ((a - b) * (a - b)).max(1e-12)
+            }
+        }
+    }
+
+    fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
+        for (o, f) in out.iter_mut().zip(&ctx.field.external) {
+            *o += *f;
+        }
+    }
+}
+
+/// The rigidity term of eq. (2): the bending direction `−Δ²X` traced along
+/// each phase boundary, weighted by [`SegmentParams::rigidity`] (β).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Rigidity;
+
+impl<K: Raster> ForceTerm<K> for Rigidity {
+    fn name(&self) -> &str {
+        "rigidity"
+    }
+
+    fn kind(&self, params: &SegmentParams) -> TermKind {
+        TermKind::Smoothing {
+            weight: params.rigidity,
+            max_step: MAX_BENDING_STEP,
+        }
+    }
+
+    fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
+        for (o, f) in out.iter_mut().zip(&ctx.field.bending) {
+            *o += *f;
+        }
+    }
+}
+
+/// The elasticity term of eq. (2): the umbrella `ΔX` along each phase
+/// boundary, weighted by [`SegmentParams::elasticity`] (α, 0 by default).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Elasticity;
+
+impl<K: Raster> ForceTerm<K> for Elasticity {
+    fn name(&self) -> &str {
+        "elasticity"
+    }
+
+    fn kind(&self, params: &SegmentParams) -> TermKind {
+        TermKind::Smoothing {
+            weight: params.elasticity,
+            max_step: MAX_STRETCHING_STEP,
+        }
+    }
+
+    fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
+        for (o, f) in out.iter_mut().zip(&ctx.field.stretching) {
+            *o += *f;
+        }
+    }
+}
+
+/// The paper's cell flips (section III.C): two phases, a cell flips when its
+/// mean is nearer the other phase's mean; more phases, to the phase most of
+/// its pixels are nearest. With [`SegmentParams::flip_guard`] a flip must also
+/// lower the Mumford–Shah energy (see [`crate::segment::flips`]).
+#[derive(Clone, Debug, Default)]
+pub struct CellFlips {
+    flipper: Flipper,
+}
+
+impl<K: Raster> LabelRule<K> for CellFlips {
+    fn name(&self) -> &str {
+        "cell flips"
+    }
+
+    fn relabel(&mut self, ctx: &mut LabelContext<'_, '_, K>) -> usize {
+        self.flipper.flip(
+            ctx.complex,
+            ctx.image,
+            ctx.cells,
+            ctx.phases,
+            ctx.length_weight,
+            ctx.params.flip_guard,
+        )
+    }
+}
+
+/// Whole-region flips (with [`SegmentParams::flip_guard`] only): every
+/// connected same-phase region is relabelled to the neighbouring phase that
+/// lowers the Mumford–Shah energy most, if any does.
+#[derive(Clone, Debug, Default)]
+pub struct ComponentFlips {
+    flipper: Flipper,
+}
+
+impl<K: Raster> LabelRule<K> for ComponentFlips {
+    fn name(&self) -> &str {
+        "component flips"
+    }
+
+    fn relabel(&mut self, ctx: &mut LabelContext<'_, '_, K>) -> usize {
+        if !ctx.params.flip_guard {
+            return 0;
+        }
+        self.flipper
+            .component_flips(ctx.complex, ctx.cells, ctx.phases, ctx.length_weight)
+    }
+}
+
+/// The initialisation chosen by [`SegmentParams::init`] (range, disks or a
+/// label image).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ParamsInit;
+
+impl<K: Raster> Initialiser<K> for ParamsInit {
+    fn initialise(
+        &mut self,
+        ctx: &mut InitContext<'_, '_, K>,
+    ) -> Result<Vec<Option<f64>>, SegmentError> {
+        initialise(ctx.complex, ctx.image, ctx.params, ctx.cells, ctx.range)
+    }
+}
