@@ -118,12 +118,12 @@
 //! | | 2D | 3D |
 //! |---|---|---|
 //! | complex | [`complex::Complex2`] = `Complex<D2>` | [`complex::Complex3`] = `Complex<D3>` |
-//! | segmentation | [`segment::Segmentation2`] = `Segmentation<'_, D2>` | `Segmentation<'_, D3>`, once `D3` implements [`segment::Raster`] |
-//! | models | [`segment::Models2`] = `Models<D2>` | `Models<D3>`, likewise |
+//! | segmentation | [`segment::Segmentation2`] = `Segmentation<'_, D2>` | [`segment::Segmentation3`] = `Segmentation<'_, D3>` |
+//! | models | [`segment::Models2`] = `Models<D2>` | [`segment::Models3`] = `Models<D3>` |
 //!
 //! The segmentation needs only [`segment::Raster`] from a dimension (which
-//! pixels a cell covers, facet sampling, interpolation); the 3D
-//! implementation is the one piece still to come.
+//! pixels a cell covers, facet sampling, interpolation): scanline spans over
+//! pixels in 2D, exact voxel-centre ownership of tetrahedra in 3D.
 //!
 //! # Layers
 //!

@@ -50,3 +50,7 @@ pub use raster::Raster;
 pub type Segmentation2<'a> = Segmentation<'a, crate::dim::D2>;
 /// The 2D models of the evolution.
 pub type Models2 = Models<crate::dim::D2>;
+/// The 3D segmentation (tetrahedra over voxels).
+pub type Segmentation3<'a> = Segmentation<'a, crate::dim::D3>;
+/// The 3D models of the evolution.
+pub type Models3 = Models<crate::dim::D3>;
