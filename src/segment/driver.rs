@@ -122,6 +122,26 @@ pub struct Segmentation<'a, K: Raster> {
 impl<'a, K: Raster> Segmentation<'a, K> {
     /// Validates the input, builds the mesh at edge length L and initialises the labels.
     pub fn new(image: ImageView<'a>, params: SegmentParams) -> Result<Self, SegmentError> {
+        Self::build(image, params, None)
+    }
+
+    /// Starts from a given complex (e.g. one conforming to an initial
+    /// surface) whose labels are the initialisation: `params.init` is not
+    /// used, and `params.edge_length` (or its default) sets the DSC's L. The
+    /// complex must cover the image domain `[0, dims]`.
+    pub fn from_complex(
+        image: ImageView<'a>,
+        params: SegmentParams,
+        complex: Complex<K>,
+    ) -> Result<Self, SegmentError> {
+        Self::build(image, params, Some(complex))
+    }
+
+    fn build(
+        image: ImageView<'a>,
+        params: SegmentParams,
+        preset: Option<Complex<K>>,
+    ) -> Result<Self, SegmentError> {
         let t0 = Instant::now();
         if image.is_empty() {
             return Err(SegmentError::EmptyImage);
@@ -144,10 +164,26 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
         let l = params.resolved_edge_length(w, h);
         let dsc = DscParams::new::<K>(l);
-        let mut complex = K::box_complex(&image, l)?;
+        let given = preset.is_some();
+        let mut complex = match preset {
+            Some(c) => c,
+            None => K::box_complex(&image, l)?,
+        };
         let mut cells = Vec::new();
         integrate_cells(&complex, &image, &mut cells);
-        let hints = initialise(&mut complex, &image, &params, &cells, range)?;
+        let hints = if given {
+            if let Some(m) = complex.cell_ids().map(|c| complex.label(c)).max() {
+                if m as usize >= params.phases {
+                    return Err(SegmentError::Init(format!(
+                        "the initial mesh uses label {m} but there are only {} phases",
+                        params.phases
+                    )));
+                }
+            }
+            vec![None; params.phases]
+        } else {
+            initialise(&mut complex, &image, &params, &cells, range)?
+        };
         let mut phases = PhaseStats::new(params.phases);
         phases.mean = hints;
         phases.update(&complex, &cells);
@@ -247,7 +283,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let data_energy = self.data_energy();
 
         let mut flips = 0;
-        if self.params.label_flips {
+        if self.params.label_flips && (iteration - 1) % self.params.flip_interval.max(1) == 0 {
             let t = Instant::now();
             flips = self.flipper.flip(
                 &mut self.complex,

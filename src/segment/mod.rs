@@ -11,7 +11,9 @@
 //! - [`forces`]: region forces (eqs. 5–7) and rigidity (eq. 2);
 //! - [`flips`]: label flips (mean rule, pixel-dominant rule);
 //! - [`driver`]: the iteration, the Mumford–Shah energy and the stopping rule;
-//! - [`params`] and [`error`].
+//! - [`params`] and [`error`];
+//! - `tetgen_init` (feature `tetgen`): initial 3D complexes conforming to a
+//!   closed surface, built with TetGen.
 
 pub mod driver;
 pub mod error;
@@ -23,6 +25,8 @@ pub mod integrate;
 pub mod output3d;
 pub mod params;
 pub mod raster;
+#[cfg(feature = "tetgen")]
+pub mod tetgen_init;
 pub mod voxel3d;
 
 pub use driver::{IterationRecord, SegmentReport, Segmentation, StageTimes, StopReason};

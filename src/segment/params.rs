@@ -80,6 +80,14 @@ pub struct SegmentParams {
     pub init: Init,
     /// Whether cells may change label (the paper's label flips).
     pub label_flips: bool,
+    /// Label flips are tried on iterations 1, 1 + k, 1 + 2k, … for
+    /// `flip_interval` = k (1: every iteration, the 2D default). Between flip
+    /// iterations only the interfaces move, and an iteration without a flip
+    /// attempt counts as flip-free for the stopping rule. The 3D reference
+    /// code relabelled every 20 iterations; see [`SegmentParams::new_3d`] for
+    /// the 3D default.
+    #[serde(default = "one")]
+    pub flip_interval: usize,
     /// Whether flips must also lower the Mumford–Shah energy (see [`crate::segment::flips`]).
     pub flip_guard: bool,
     /// Region force for two-phase interfaces.
@@ -132,6 +140,7 @@ impl SegmentParams {
             max_iterations: 500,
             init: Init::Range,
             label_flips: true,
+            flip_interval: 1,
             flip_guard: true,
             force: ForceModel::Normalised,
             rigidity: 5.0,
@@ -219,6 +228,9 @@ impl SegmentParams {
             self.sample_spacing,
             self.sample_spacing > 0.0 && self.sample_spacing <= 16.0,
         )?;
+        if self.flip_interval == 0 {
+            return Err(SegmentError::Param("flip_interval", 0.0));
+        }
         if self.max_iterations == 0 {
             return Err(SegmentError::Param("max_iterations", 0.0));
         }
@@ -295,6 +307,10 @@ impl SegmentParams {
         self.edge_length
             .unwrap_or_else(|| default_edge_length(width, height, self.phases))
     }
+}
+
+fn one() -> usize {
+    1
 }
 
 /// The default average edge length for `phases` phases: `min(W, H) / 64 ·

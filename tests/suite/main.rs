@@ -8,5 +8,5 @@ mod dsc3d;
 mod figures;
 mod generic;
 mod prop2d;
-mod segment2d;
 mod seg3d;
+mod segment2d;
