@@ -67,6 +67,7 @@ def main():
                     [a.bin, "phantom3d", name, "--size", str(size), "--noise", str(noise),
                      "--seed", str(a.seed), "--out", d],
                     check=True,
+                    stdout=subprocess.DEVNULL,
                 )
                 vol = tifffile.imread(os.path.join(d, f"{name}.tif"))
                 truth = tifffile.imread(os.path.join(d, f"{name}_labels.tif"))

@@ -346,6 +346,7 @@ mod tests {
             }
         }
         let mean = sum / n as f64;
+        eprintln!("L = 3: {} tets, mean edge {mean:.3}", c.cell_count());
         assert!((1.5..=4.5).contains(&mean), "mean edge {mean}");
     }
 
