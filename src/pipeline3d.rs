@@ -28,6 +28,11 @@ pub struct Segment3dJob {
     pub params: SegmentParams,
     /// Label volume for `Init::Labels` (8-bit values are the phases).
     pub init_labels: Option<PathBuf>,
+    /// A closed triangle surface (OFF, OBJ, STL; voxel coordinates, the
+    /// volume box `[0, nx]×[0, ny]×[0, nz]`): the initial complex is
+    /// tetrahedralised by TetGen to conform to it, phase 1 inside and 0
+    /// outside, and `params.init` is not used. Needs the `tetgen` feature.
+    pub init_surface: Option<PathBuf>,
     /// No progress bar.
     pub quiet: bool,
 }
@@ -51,6 +56,7 @@ struct Report<'a> {
     version: &'static str,
     source: &'a Source,
     init_labels: Option<&'a Path>,
+    init_surface: Option<&'a Path>,
     dims: [usize; 3],
     params: &'a SegmentParams,
     dsc: &'a crate::dsc::DscParams,
@@ -154,7 +160,10 @@ pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
     let view = ImageView::new_3d(dims, volume.data())
         .ok_or_else(|| Error::Usage("volume buffer does not match its size".into()))?;
     let t_seg = Instant::now();
-    let mut seg = Segmentation::<D3>::new(view, params.clone())?;
+    let mut seg = match &job.init_surface {
+        None => Segmentation::<D3>::new(view, params.clone())?,
+        Some(path) => surface_segmentation(view, params.clone(), path)?,
+    };
     let stage = staging(&job.out)?;
     let bar = if job.quiet {
         ProgressBar::hidden()
@@ -192,6 +201,7 @@ pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
         version: env!("CARGO_PKG_VERSION"),
         source: &job.source,
         init_labels: job.init_labels.as_deref(),
+        init_surface: job.init_surface.as_deref(),
         dims,
         params: seg.params(),
         dsc: seg.dsc_params(),
@@ -220,6 +230,37 @@ pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
         &["labels.tif", "mesh.vtu", "interface.vtp", "report.json"],
     )?;
     Ok(report)
+}
+
+/// A segmentation starting from a TetGen mesh conforming to the surface in `path`.
+#[cfg(feature = "tetgen")]
+fn surface_segmentation<'a>(
+    view: ImageView<'a>,
+    params: SegmentParams,
+    path: &Path,
+) -> Result<Segmentation<'a, D3>> {
+    use crate::segment::tetgen_init::complex_from_surface;
+    let surface = crate::io::surface::read_surface(path)
+        .map_err(|e| Error::Usage(format!("--init-surface {}: {e}", path.display())))?;
+    params.validate_dims(view.dims)?;
+    let l = params.resolved_edge_length(view.dims[0], view.dims[1]);
+    let complex = complex_from_surface(&surface, view.dims, l)
+        .map_err(|e| Error::Usage(format!("--init-surface {}: {e}", path.display())))?;
+    Ok(Segmentation::from_complex(view, params, complex)?)
+}
+
+/// Without the `tetgen` feature there is no TetGen to build the mesh.
+#[cfg(not(feature = "tetgen"))]
+fn surface_segmentation<'a>(
+    _view: ImageView<'a>,
+    _params: SegmentParams,
+    path: &Path,
+) -> Result<Segmentation<'a, D3>> {
+    Err(Error::Usage(format!(
+        "--init-surface {} needs TetGen: rebuild with `cargo build --release --features tetgen` \
+         (needs libtet1.5-dev; TetGen is AGPL-3, so the feature is off by default)",
+        path.display()
+    )))
 }
 
 /// Writes 3D phantom `name` as `NAME.tif` (the 8-bit volume) and
@@ -273,6 +314,7 @@ mod tests {
             out: dir.path().join("out"),
             params,
             init_labels: None,
+            init_surface: None,
             quiet: true,
         };
         let report = run_segment3d(&job).unwrap();

@@ -78,9 +78,18 @@ struct Segment3dArgs {
     /// Label volume for --init labels (same size as the volume, 8-bit values 0..N-1).
     #[arg(long)]
     init_labels: Option<PathBuf>,
+    /// Initial surface (closed triangle mesh: OFF, OBJ or STL, in voxel
+    /// coordinates strictly inside [0,nx]×[0,ny]×[0,nz]): the initial mesh is
+    /// tetrahedralised by TetGen to conform to it, phase 1 inside, 0 outside;
+    /// replaces --init. Needs a build with `--features tetgen` (AGPL-3 TetGen).
+    #[arg(long, value_name = "FILE")]
+    init_surface: Option<PathBuf>,
     /// Keep every cell's label: only the interfaces move.
     #[arg(long)]
     no_label_flips: bool,
+    /// Try label flips every K iterations [default: the 3D default of SegmentParams::new_3d].
+    #[arg(long, value_name = "K")]
+    flip_interval: Option<usize>,
     /// Rigidity weight β of eq. (2).
     #[arg(long, allow_hyphen_values = true)]
     rigidity: Option<f64>,
@@ -373,6 +382,9 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
     if let Some(b) = a.rigidity {
         params.rigidity = b;
     }
+    if let Some(k) = a.flip_interval {
+        params.flip_interval = k;
+    }
     params.init = match a.init {
         Init3Kind::Range => Init::Range,
         Init3Kind::Balls => {
@@ -402,6 +414,7 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
         out: a.out,
         params,
         init_labels: a.init_labels,
+        init_surface: a.init_surface,
         quiet: a.quiet,
     };
     let report = run_segment3d(&job)?;

@@ -149,7 +149,28 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     pub fn with_models(
         image: ImageView<'a>,
         params: SegmentParams,
+        models: Models<K>,
+    ) -> Result<Self, SegmentError> {
+        Self::build(image, params, models, None)
+    }
+
+    /// Starts the paper's models from a given complex (e.g. one conforming to
+    /// an initial surface) whose labels are the initialisation: `params.init`
+    /// is not used, and `params.edge_length` (or its default) sets the DSC's
+    /// L. The complex must cover the image domain `[0, dims]`.
+    pub fn from_complex(
+        image: ImageView<'a>,
+        params: SegmentParams,
+        complex: Complex<K>,
+    ) -> Result<Self, SegmentError> {
+        Self::build(image, params, Models::paper(), Some(complex))
+    }
+
+    fn build(
+        image: ImageView<'a>,
+        params: SegmentParams,
         mut models: Models<K>,
+        preset: Option<Complex<K>>,
     ) -> Result<Self, SegmentError> {
         let t0 = Instant::now();
         if image.is_empty() {
@@ -173,16 +194,24 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
         let l = params.resolved_edge_length(w, h);
         let dsc = DscParams::new::<K>(l);
-        let mut complex = K::box_complex(&image, l)?;
+        let given = preset.is_some();
+        let mut complex = match preset {
+            Some(c) => c,
+            None => K::box_complex(&image, l)?,
+        };
         let mut cells = Vec::new();
         integrate_cells(&complex, &image, &mut cells);
-        let hints = models.init.initialise(&mut InitContext {
-            complex: &mut complex,
-            image: &image,
-            cells: &cells,
-            params: &params,
-            range,
-        })?;
+        let mut hints = if given {
+            vec![None; params.phases]
+        } else {
+            models.init.initialise(&mut InitContext {
+                complex: &mut complex,
+                image: &image,
+                cells: &cells,
+                params: &params,
+                range,
+            })?
+        };
         if let Some(c) = complex
             .cell_ids()
             .find(|&c| complex.label(c) as usize >= params.phases)
@@ -193,7 +222,6 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 params.phases
             )));
         }
-        let mut hints = hints;
         hints.resize(params.phases, None);
         let mut phases = PhaseStats::new(params.phases);
         phases.mean = hints;
@@ -342,7 +370,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let data_energy = self.data_energy();
 
         let mut flips = 0;
-        if self.params.label_flips {
+        if self.params.label_flips && (iteration - 1) % self.params.flip_interval.max(1) == 0 {
             let t = Instant::now();
             let mut ctx = LabelContext {
                 complex: &mut self.complex,

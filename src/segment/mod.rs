@@ -16,7 +16,9 @@
 //!   examples from the deformable-model literature (balloon, edge attraction,
 //!   volcano);
 //! - [`driver`]: the session loop, the Mumford–Shah energy and the stopping rule;
-//! - [`params`] and [`error`].
+//! - [`params`] and [`error`];
+//! - `tetgen_init` (feature `tetgen`): initial 3D complexes conforming to a
+//!   closed surface, built with TetGen.
 
 pub mod driver;
 pub mod error;
@@ -30,6 +32,8 @@ pub mod models;
 pub mod output3d;
 pub mod params;
 pub mod raster;
+#[cfg(feature = "tetgen")]
+pub mod tetgen_init;
 pub mod voxel3d;
 
 pub use driver::{IterationRecord, SegmentReport, Segmentation, StageTimes, StopReason};

@@ -304,3 +304,92 @@ fn unwritable_out() {
         "output directory",
     );
 }
+
+/// A cube surface `[lo, hi]³` as an OFF file (12 consistently oriented triangles).
+fn write_cube_off(dir: &Path, lo: f64, hi: f64) -> PathBuf {
+    let p = dir.join("cube.off");
+    let mut s = String::from("OFF\n8 12 0\n");
+    for i in 0..8 {
+        let c = |bit: usize| if i & bit != 0 { hi } else { lo };
+        s += &format!("{} {} {}\n", c(1), c(2), c(4));
+    }
+    for q in [
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+    ] {
+        s += &format!(
+            "3 {} {} {}\n3 {} {} {}\n",
+            q[0], q[1], q[2], q[0], q[2], q[3]
+        );
+    }
+    std::fs::write(&p, s).unwrap();
+    p
+}
+
+/// `segment3d --init-surface`: with the `tetgen` feature the run starts from
+/// a TetGen mesh conforming to the surface; without it, one clear error line.
+#[test]
+fn segment3d_init_surface() {
+    let d = tmp();
+    let o = bin()
+        .args([
+            "phantom3d",
+            "two_balls",
+            "--size",
+            "24",
+            "--noise",
+            "0.05",
+            "--out",
+        ])
+        .arg(d.path())
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let surface = write_cube_off(d.path(), 5.0, 19.0);
+    let out = d.path().join("out");
+    let o = bin()
+        .arg("segment3d")
+        .arg(d.path().join("two_balls.tif"))
+        .arg("--init-surface")
+        .arg(&surface)
+        .args(["--max-iterations", "5", "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    if cfg!(feature = "tetgen") {
+        assert!(o.status.success(), "{err}");
+        let rep: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+        assert!(rep["init_surface"].as_str().unwrap().ends_with("cube.off"));
+        assert!(rep["cells"].as_u64().unwrap() > 100);
+        // A surface outside the box is refused with a clear message.
+        let bad = write_cube_off(d.path(), -1.0, 10.0);
+        let o = bin()
+            .arg("segment3d")
+            .arg(d.path().join("two_balls.tif"))
+            .arg("--init-surface")
+            .arg(&bad)
+            .args(["--quiet", "--out"])
+            .arg(d.path().join("bad"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        assert!(
+            err.starts_with("error: ") && err.contains("inside the volume box"),
+            "{err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    } else {
+        assert!(!o.status.success());
+        assert!(err.starts_with("error: "), "{err}");
+        assert!(err.contains("--features tetgen"), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!out.join("report.json").exists());
+    }
+}
