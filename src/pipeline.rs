@@ -9,7 +9,7 @@ use crate::dim::D2;
 use crate::error::{Error, Result};
 use crate::io::{save_gray8_png, write_bytes_atomic, write_vtu, CellArray, Cells, Image2, Overlay};
 use crate::phantom::{self, Phantom2Kind};
-use crate::segment::{ImageView, Init, SegmentParams, SegmentReport, Segmentation};
+use crate::segment::{ImageView, Init, Raster, SegmentParams, SegmentReport, Segmentation};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -87,6 +87,36 @@ struct Report<'a> {
 }
 
 /// Checks that `dir` can hold our outputs: creates it, then a staging directory in it.
+/// Runs a segmentation to its end with a progress bar on stderr (hidden when
+/// `quiet`), shared by the 2D and 3D pipelines.
+pub(crate) fn run_with_progress<K: Raster>(
+    seg: &mut Segmentation<'_, K>,
+    max_iterations: usize,
+    quiet: bool,
+) -> SegmentReport {
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(max_iterations as u64);
+        b.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        b
+    };
+    let report = seg.run(|r| {
+        bar.set_position(r.iteration as u64);
+        bar.set_message(format!(
+            "E={:.4} flips={} move={:.3}L",
+            r.energy, r.flips, r.max_displacement
+        ));
+    });
+    bar.finish_and_clear();
+    report
+}
+
 pub(crate) fn staging(dir: &Path) -> Result<tempfile::TempDir> {
     let err = |reason: String| Error::OutputDir {
         path: dir.to_path_buf(),
@@ -229,26 +259,7 @@ pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
     let mut seg = Segmentation::<D2>::new(view, params.clone())?;
     let stage = staging(&job.out)?;
 
-    let bar = if job.quiet {
-        ProgressBar::hidden()
-    } else {
-        let b = ProgressBar::new(params.max_iterations as u64);
-        b.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        b
-    };
-    let report = seg.run(|r| {
-        bar.set_position(r.iteration as u64);
-        bar.set_message(format!(
-            "E={:.4} flips={} move={:.3}L",
-            r.energy, r.flips, r.max_displacement
-        ));
-    });
-    bar.finish_and_clear();
+    let report = run_with_progress(&mut seg, params.max_iterations, job.quiet);
     let segment = t_seg.elapsed().as_secs_f64();
 
     let t_write = Instant::now();

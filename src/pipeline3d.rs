@@ -9,9 +9,8 @@ use crate::error::{Error, Result};
 use crate::io::{save_labels_tiff, write_bytes_atomic, Volume};
 use crate::phantom::noise::to_u8;
 use crate::phantom::Phantom3Kind;
-use crate::pipeline::{mean_dice, publish, staging, Source};
+use crate::pipeline::{mean_dice, publish, run_with_progress, staging, Source};
 use crate::segment::{ImageView, Init, SegmentParams, SegmentReport, Segmentation};
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -165,26 +164,7 @@ pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
         Some(path) => surface_segmentation(view, params.clone(), path)?,
     };
     let stage = staging(&job.out)?;
-    let bar = if job.quiet {
-        ProgressBar::hidden()
-    } else {
-        let b = ProgressBar::new(params.max_iterations as u64);
-        b.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        b
-    };
-    let report = seg.run(|r| {
-        bar.set_position(r.iteration as u64);
-        bar.set_message(format!(
-            "E={:.4} flips={} move={:.3}L",
-            r.energy, r.flips, r.max_displacement
-        ));
-    });
-    bar.finish_and_clear();
+    let report = run_with_progress(&mut seg, params.max_iterations, job.quiet);
     let segment_seconds = t_seg.elapsed().as_secs_f64();
 
     let t_write = Instant::now();
