@@ -326,18 +326,7 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
     };
     let report = run_segment(&job)?;
     if !a.quiet {
-        eprintln!(
-            "{} after {} iterations ({:.2} s), {} cells; outputs in {}",
-            if report.converged {
-                "converged"
-            } else {
-                "stopped at the iteration cap"
-            },
-            report.iterations,
-            report.times.total,
-            report.cells,
-            job.out.display()
-        );
+        print_summary(&report, "cells", &job.out);
     }
     Ok(())
 }
@@ -419,20 +408,25 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
     };
     let report = run_segment3d(&job)?;
     if !a.quiet {
-        eprintln!(
-            "{} after {} iterations ({:.2} s), {} tets; outputs in {}",
-            if report.converged {
-                "converged"
-            } else {
-                "stopped at the iteration cap"
-            },
-            report.iterations,
-            report.times.total,
-            report.cells,
-            job.out.display()
-        );
+        print_summary(&report, "tets", &job.out);
     }
     Ok(())
+}
+
+/// One line on stderr: how the run ended and where the outputs are.
+fn print_summary(report: &dsc_seg::segment::SegmentReport, cells: &str, out: &std::path::Path) {
+    let ending = if report.converged {
+        "converged"
+    } else {
+        "stopped at the iteration cap"
+    };
+    eprintln!(
+        "{ending} after {} iterations ({:.2} s), {} {cells}; outputs in {}",
+        report.iterations,
+        report.times.total,
+        report.cells,
+        out.display()
+    );
 }
 
 fn main() -> ExitCode {
