@@ -87,6 +87,19 @@ struct Report<'a> {
 }
 
 /// Checks that `dir` can hold our outputs: creates it, then a staging directory in it.
+/// The final mesh as the overlay and VTK writers want it: 2D points,
+/// triangles, and each triangle's phase ranked by increasing mean.
+fn overlay_arrays(seg: &Segmentation<'_, D2>) -> (Vec<[f64; 2]>, Vec<[u32; 3]>, Vec<u32>) {
+    let order = seg.phase_order();
+    let arrays = seg.complex().to_arrays();
+    let phase = arrays
+        .labels
+        .iter()
+        .map(|&l| order[(l as usize).min(order.len() - 1)] as u32)
+        .collect();
+    (arrays.points_2d(), arrays.triangles(), phase)
+}
+
 /// Runs a segmentation to its end with a progress bar on stderr (hidden when
 /// `quiet`), shared by the 2D and 3D pipelines.
 pub(crate) fn run_with_progress<K: Raster>(
@@ -181,19 +194,7 @@ pub fn save_overlay_png(
     draw_mesh: bool,
     path: impl AsRef<Path>,
 ) -> Result<()> {
-    let order = seg.phase_order();
-    let arrays = seg.complex().to_arrays();
-    let points: Vec<[f64; 2]> = arrays.points.iter().map(|p| [p[0], p[1]]).collect();
-    let tris: Vec<[u32; 3]> = arrays
-        .connectivity
-        .chunks_exact(3)
-        .map(|t| [t[0], t[1], t[2]])
-        .collect();
-    let phase: Vec<u32> = arrays
-        .labels
-        .iter()
-        .map(|&l| order[(l as usize).min(order.len() - 1)] as u32)
-        .collect();
+    let (points, tris, phase) = overlay_arrays(seg);
     Overlay::new(image, &points, &tris, &phase)
         .with_mesh(draw_mesh)
         .to_png(path)?;
@@ -265,18 +266,7 @@ pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
     let t_write = Instant::now();
     let labels = seg.label_image();
     let order = seg.phase_order();
-    let arrays = seg.complex().to_arrays();
-    let points2: Vec<[f64; 2]> = arrays.points.iter().map(|p| [p[0], p[1]]).collect();
-    let tris: Vec<[u32; 3]> = arrays
-        .connectivity
-        .chunks_exact(3)
-        .map(|t| [t[0], t[1], t[2]])
-        .collect();
-    let phase: Vec<u32> = arrays
-        .labels
-        .iter()
-        .map(|&l| order[(l as usize).min(order.len() - 1)] as u32)
-        .collect();
+    let (points2, tris, phase) = overlay_arrays(&seg);
     let phase_i32: Vec<i32> = phase.iter().map(|&p| p as i32).collect();
     let dir = stage.path();
     save_gray8_png(dir.join("labels.png"), w, h, &labels)?;
@@ -285,7 +275,7 @@ pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
     overlay.to_svg(dir.join("overlay.svg"))?;
     write_vtu(
         dir.join("mesh.vtu"),
-        &arrays.points,
+        &crate::io::vtk::points_2d_to_3d(&points2),
         Cells::Triangles(&tris),
         &[("phase", CellArray::I32(&phase_i32))],
     )?;
