@@ -53,6 +53,9 @@ pub fn scenario(size: usize, picture: Option<&Path>) -> Result<Outcome, SegmentE
         phase: 1,
     }]);
     params.max_iterations = 400;
+    // A balloon must bend into narrow branches: a stiffer curve (the default
+    // β = 5, tuned against image noise) stops at the branch entrances.
+    params.rigidity = 1.0;
     let edges = Arc::new(EdgeMap::new(&image, 1.5));
     let models = Models::empty()
         .with_force(Balloon::new(1, 1.0).with_edge_stop(edges.clone(), 0.05))

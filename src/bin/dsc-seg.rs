@@ -186,8 +186,9 @@ struct SegmentArgs {
     /// Largest displacement per iteration as a fraction of L.
     #[arg(long, allow_hyphen_values = true)]
     step_fraction: Option<f64>,
-    /// Triple-junction force: `paper` (eq. 7, junction phases bracket every
-    /// sample) or `edge-local` (each sample bracketed by its own edge's phases).
+    /// Triple-junction force of eq. (7): `edge-local` (the default: each
+    /// sample bracketed by its own edge's phases) or `paper` (literal: the
+    /// junction's phases bracket every sample; grows wedges on blurred edges).
     #[arg(long, value_enum)]
     junction_force: Option<JunctionArg>,
     /// Weight of the length term of the Mumford–Shah energy, as a multiple of the smallest gap between phase means.

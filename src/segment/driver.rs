@@ -124,6 +124,9 @@ pub struct Segmentation<'a, K: Raster> {
     buffers: Vec<Vec<K::Point>>,
     /// Sum of the external terms.
     external: Vec<K::Point>,
+    /// Per-vertex displacement of the iteration, and a smoothing operator's output.
+    displacement: Vec<K::Point>,
+    applied: Vec<K::Point>,
     dest: Destinations<K>,
     nu: f64,
     range: (f64, f64),
@@ -242,6 +245,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             models,
             buffers: Vec::new(),
             external: Vec::new(),
+            displacement: Vec::new(),
+            applied: Vec::new(),
             dest,
             nu: 0.0,
             range,
@@ -436,36 +441,49 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         // Step: the largest external displacement is `step`·L once a force
         // reaches the reference magnitude (1 for eq. 6: a pixel exactly at a
         // mean); weaker fields move proportionally less, so the evolution can
-        // settle. The internal terms are explicit smoothing steps whose
-        // coefficient (dt·β/L) is capped at a stable value: for the bending
-        // term the highest-frequency mode changes by a factor 1 − 4k per
-        // step, so k ≤ 0.2 (and k ≤ 0.5 for the umbrella of the elasticity).
+        // settle. The internal terms are explicit smoothing steps of
+        // coefficient k = dt·β/L; for the bending term the highest-frequency
+        // mode changes by a factor 1 − 4k per step, so k ≤ 0.2 is stable (and
+        // k ≤ 0.5 for the umbrella of the elasticity). A larger k is split
+        // into ⌈k/0.2⌉ sub-steps (the terms are linear in the positions), so
+        // β weighs the same against the region force at every step size.
         let fmax = self.external.iter().map(|f| f.length()).fold(0.0, f64::max);
         let denom = fmax.max(reference.unwrap_or(1.0));
         let scale = self.step * l / if denom > 0.0 { denom } else { 1.0 };
-        // (buffer index, coefficient) of the smoothing terms
-        let smoothing: Vec<(usize, f64)> = kinds
-            .iter()
-            .enumerate()
-            .filter_map(|(i, k)| match *k {
-                TermKind::Smoothing { weight, max_step } => {
-                    Some((i, (scale * weight / l).min(max_step)))
+        self.displacement.clear();
+        self.displacement
+            .extend(self.external.iter().map(|&f| f * scale));
+        for (b, term) in self.models.forces.iter_mut().enumerate() {
+            let TermKind::Smoothing { weight, max_step } = kinds[b] else {
+                continue;
+            };
+            let k = scale * weight / l;
+            let substeps = (k / max_step).ceil().max(1.0);
+            let buf = &self.buffers[b];
+            if substeps == 1.0
+                || !term.apply_to(&mut self.forces, &self.displacement, &mut self.applied)
+            {
+                let k = k.min(max_step);
+                for (d, f) in self.displacement.iter_mut().zip(buf) {
+                    *d += *f * k;
                 }
-                TermKind::External => None,
-            })
-            .collect();
-        self.dest.clear();
-        let mut max_disp: f64 = 0.0;
-        for i in 0..self.complex.vertex_capacity() {
-            let v = VertexId(i as u32);
-            if !self.complex.is_vertex_alive(v) {
                 continue;
             }
-            let mut d = self.external[i] * scale;
-            for &(b, k) in &smoothing {
-                d += self.buffers[b][i] * k;
+            let k = k / substeps;
+            for sub in 0..substeps as usize {
+                if sub > 0 {
+                    term.apply_to(&mut self.forces, &self.displacement, &mut self.applied);
+                }
+                for ((d, f), a) in self.displacement.iter_mut().zip(buf).zip(&self.applied) {
+                    *d += (*f + *a) * k;
+                }
             }
-            if d == K::Point::zero() {
+        }
+        self.dest.clear();
+        let mut max_disp: f64 = 0.0;
+        for (i, &d) in self.displacement.iter().enumerate() {
+            let v = VertexId(i as u32);
+            if d == K::Point::zero() || !self.complex.is_vertex_alive(v) {
                 continue;
             }
             let p = self.complex.position(v);

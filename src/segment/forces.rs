@@ -50,13 +50,10 @@ struct Acc<P> {
     normal: [P; MAXP],
     /// Eq. (7) weights of each phase, integrated with the hat weights.
     weight: [f64; MAXP],
-    /// Sum of boundary neighbours' positions (then their umbrellas) per phase.
-    nsum: [P; MAXP],
+    /// Number of boundary neighbours per phase (the umbrella's denominators).
     ncnt: [f64; MAXP],
-    usum: [P; MAXP],
     ext: P,
     share: f64,
-    umbrella: P,
 }
 
 impl<P: Point> Acc<P> {
@@ -65,12 +62,12 @@ impl<P: Point> Acc<P> {
         self.np = 0;
         self.normal = [P::zero(); MAXP];
         self.weight = [0.0; MAXP];
-        self.nsum = [P::zero(); MAXP];
         self.ncnt = [0.0; MAXP];
-        self.usum = [P::zero(); MAXP];
         self.ext = P::zero();
         self.share = 0.0;
-        self.umbrella = P::zero();
+    }
+    fn slot_of(&self, l: Label) -> Option<usize> {
+        self.phases[..self.np].iter().position(|&p| p == l)
     }
     fn slot(&mut self, l: Label) -> Option<usize> {
         if let Some(s) = self.phases[..self.np].iter().position(|&p| p == l) {
@@ -119,6 +116,11 @@ pub struct ForceField<K: Dim> {
     /// Umbrella `ΔX` per vertex id (pixels), the direction of the elasticity force.
     pub stretching: Vec<K::Point>,
     facets: Vec<Facet>,
+    /// Vertices the boundary Laplacian acts on (on the interface, off the border).
+    active: Vec<u32>,
+    /// Per-vertex, per-phase neighbour sums of the boundary Laplacian.
+    slot_sums: Vec<[K::Point; MAXP]>,
+    scratch: Vec<K::Point>,
     star: Vec<CellId>,
     piece: Vec<usize>,
     stack: Vec<usize>,
@@ -138,6 +140,9 @@ impl<K: Raster> ForceField<K> {
             bending: Vec::new(),
             stretching: Vec::new(),
             facets: Vec::new(),
+            active: Vec::new(),
+            slot_sums: Vec::new(),
+            scratch: Vec::new(),
             star: Vec::new(),
             piece: Vec::new(),
             stack: Vec::new(),
@@ -220,12 +225,9 @@ impl<K: Raster> ForceField<K> {
             phases: [0; MAXP],
             normal: [K::Point::zero(); MAXP],
             weight: [0.0; MAXP],
-            nsum: [K::Point::zero(); MAXP],
             ncnt: [0.0; MAXP],
-            usum: [K::Point::zero(); MAXP],
             ext: K::Point::zero(),
             share: 0.0,
-            umbrella: K::Point::zero(),
         };
         self.acc.resize(nv, empty);
         for buf in [&mut self.external, &mut self.bending, &mut self.stretching] {
@@ -293,7 +295,6 @@ impl<K: Raster> ForceField<K> {
                         let acc = &mut self.acc[corners[p].index()];
                         for l in [a, b] {
                             if let Some(sl) = acc.slot(l) {
-                                acc.nsum[sl] += cpts[q];
                                 acc.ncnt[sl] += 1.0;
                             }
                         }
@@ -349,46 +350,30 @@ impl<K: Raster> ForceField<K> {
             }
         }
 
-        // Umbrellas: sector-averaged Laplacian along the phase boundaries.
-        for i in 0..nv {
-            let acc = &mut self.acc[i];
-            if acc.kind == ForceKind::Off {
-                continue;
-            }
-            let v = VertexId(i as u32);
-            if complex.class(v).on_boundary() {
-                continue; // the border is a free end for the bending term
-            }
-            let x = complex.position(v);
-            let mut u = K::Point::zero();
-            let mut m = 0.0;
-            for sl in 0..acc.np {
-                if acc.ncnt[sl] > 0.0 {
-                    u += acc.nsum[sl] * (1.0 / acc.ncnt[sl]) - x;
-                    m += 1.0;
-                }
-            }
-            if m > 0.0 {
-                acc.umbrella = u * (1.0 / m);
+        // Umbrellas and bending: the boundary Laplacian applied twice.
+        self.active.clear();
+        for (i, acc) in self.acc.iter().enumerate() {
+            if acc.kind != ForceKind::Off && !complex.class(VertexId(i as u32)).on_boundary() {
+                self.active.push(i as u32);
             }
         }
-        // Pass 2: neighbours' umbrellas along the same boundaries.
-        for f in &self.facets {
-            for p in 0..nf {
-                for q in 0..nf {
-                    if p == q {
-                        continue;
-                    }
-                    let uq = self.acc[f.corners[q].index()].umbrella;
-                    let acc = &mut self.acc[f.corners[p].index()];
-                    for l in [f.a, f.b] {
-                        if let Some(sl) = acc.slot(l) {
-                            acc.usum[sl] += uq;
-                        }
-                    }
-                }
+        let mut umbrella = std::mem::take(&mut self.stretching);
+        self.boundary_laplacian(&|i| complex.position(VertexId(i as u32)), &mut umbrella);
+        let mut bending = std::mem::take(&mut self.bending);
+        self.boundary_laplacian(&|i| umbrella[i], &mut bending);
+        for &i in &self.active {
+            let i = i as usize;
+            bending[i] = if bending[i].is_finite() {
+                bending[i] * -1.0
+            } else {
+                K::Point::zero()
+            };
+            if !umbrella[i].is_finite() {
+                umbrella[i] = K::Point::zero();
             }
         }
+        self.stretching = umbrella;
+        self.bending = bending;
 
         for i in 0..nv {
             let acc = &self.acc[i];
@@ -415,25 +400,80 @@ impl<K: Raster> ForceField<K> {
             if f.is_finite() {
                 self.external[i] = f;
             }
-            let v = VertexId(i as u32);
-            if !complex.class(v).on_boundary() {
-                // bending: −Δ(umbrella), sector-averaged like the umbrella itself
-                let mut lap = K::Point::zero();
-                let mut m = 0.0;
-                for sl in 0..acc.np {
-                    if acc.ncnt[sl] > 0.0 {
-                        lap += acc.usum[sl] * (1.0 / acc.ncnt[sl]) - acc.umbrella;
-                        m += 1.0;
+        }
+    }
+
+    /// The sector-averaged Laplacian along the phase boundaries of the last
+    /// computation, applied to the per-vertex field `input`: at every vertex
+    /// off the domain border, the mean over the phases around it of (the
+    /// average of `input` over its neighbours along that phase's boundary,
+    /// minus its own value). Applied to the positions it is the umbrella `ΔX`
+    /// of the elasticity term; applied to the umbrella, minus the bending
+    /// direction. Written into `out` at those vertices only.
+    fn boundary_laplacian(&mut self, input: &dyn Fn(usize) -> K::Point, out: &mut [K::Point]) {
+        let nf = K::N;
+        self.slot_sums
+            .resize(self.acc.len(), [K::Point::zero(); MAXP]);
+        for f in &self.facets {
+            for c in &f.corners[..nf] {
+                self.slot_sums[c.index()] = [K::Point::zero(); MAXP];
+            }
+        }
+        for f in &self.facets {
+            for p in 0..nf {
+                let acc = &self.acc[f.corners[p].index()];
+                for q in (0..nf).filter(|&q| q != p) {
+                    let x = input(f.corners[q].index());
+                    for l in [f.a, f.b] {
+                        if let Some(sl) = acc.slot_of(l) {
+                            self.slot_sums[f.corners[p].index()][sl] += x;
+                        }
                     }
-                }
-                if m > 0.0 && lap.is_finite() {
-                    self.bending[i] = lap * (-1.0 / m);
-                }
-                if acc.umbrella.is_finite() {
-                    self.stretching[i] = acc.umbrella;
                 }
             }
         }
+        for &i in &self.active {
+            let i = i as usize;
+            let (acc, sums, x) = (&self.acc[i], &self.slot_sums[i], input(i));
+            let mut lap = K::Point::zero();
+            let mut m = 0.0;
+            for sl in 0..acc.np {
+                if acc.ncnt[sl] > 0.0 {
+                    lap += sums[sl] * (1.0 / acc.ncnt[sl]) - x;
+                    m += 1.0;
+                }
+            }
+            if m > 0.0 {
+                out[i] = lap * (1.0 / m);
+            }
+        }
+    }
+
+    /// The bending operator `X ↦ −Δ²X` of the last computation applied to a
+    /// displacement field (`out` is overwritten at the vertices it acts on
+    /// and zeroed elsewhere). The bending direction is linear in the
+    /// positions, so the driver can take several stable sub-steps of it per
+    /// iteration (see [`crate::segment::model::ForceTerm::apply_to`]).
+    pub fn apply_bending(&mut self, input: &[K::Point], out: &mut Vec<K::Point>) {
+        let mut umbrella = std::mem::take(&mut self.scratch);
+        umbrella.clear();
+        umbrella.resize(input.len(), K::Point::zero());
+        self.boundary_laplacian(&|i| input[i], &mut umbrella);
+        out.clear();
+        out.resize(input.len(), K::Point::zero());
+        self.boundary_laplacian(&|i| umbrella[i], out);
+        for &i in &self.active {
+            out[i as usize] = out[i as usize] * -1.0;
+        }
+        self.scratch = umbrella;
+    }
+
+    /// The umbrella operator `X ↦ ΔX` applied to a displacement field, as
+    /// [`apply_bending`](Self::apply_bending).
+    pub fn apply_umbrella(&mut self, input: &[K::Point], out: &mut Vec<K::Point>) {
+        out.clear();
+        out.resize(input.len(), K::Point::zero());
+        self.boundary_laplacian(&|i| input[i], out);
     }
 }
 

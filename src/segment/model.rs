@@ -46,8 +46,9 @@ pub enum TermKind {
     External,
     /// An internal smoothing direction in pixels (e.g. the umbrella `ΔX` or
     /// the bending `−Δ²X`) with a weight: it moves the vertices by
-    /// `k · X` with `k = min(s · weight / L, max_step)`, an explicit smoothing
-    /// step capped at its stability limit.
+    /// `k · X` with `k = s · weight / L`, an explicit smoothing step. Above
+    /// its stability limit `max_step`, `k` is split into equal sub-steps if
+    /// the term is linear ([`ForceTerm::apply_to`]), else capped.
     Smoothing {
         /// The term's weight (β or α of eq. 2), relative to the external force.
         weight: f64,
@@ -256,6 +257,23 @@ pub trait ForceTerm<K: Raster>: AsAny + Send {
     /// are ignored by the driver). Vertices on the domain border are later
     /// constrained to slide along it.
     fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]);
+
+    /// For a [`TermKind::Smoothing`] term whose direction is linear in the
+    /// positions (the umbrella `ΔX`, the bending `−Δ²X`): writes the term's
+    /// operator applied to the displacement field `input` into `out` and
+    /// returns true. The driver then splits a coefficient above `max_step`
+    /// into stable sub-steps instead of capping it, so the weight keeps its
+    /// meaning at every step size. `field` is the driver's force field,
+    /// lent mutably for its scratch space. The default (false) caps the
+    /// coefficient.
+    fn apply_to(
+        &mut self,
+        _field: &mut ForceField<K>,
+        _input: &[K::Point],
+        _out: &mut Vec<K::Point>,
+    ) -> bool {
+        false
+    }
 }
 
 /// What a label rule may read and change.

@@ -6,6 +6,7 @@
 use crate::segment::driver::{MAX_BENDING_STEP, MAX_STRETCHING_STEP};
 use crate::segment::error::SegmentError;
 use crate::segment::flips::Flipper;
+use crate::segment::forces::ForceField;
 use crate::segment::init::initialise;
 use crate::segment::model::{
     ForceContext, ForceTerm, InitContext, Initialiser, LabelContext, LabelRule, TermKind,
@@ -70,6 +71,16 @@ impl<K: Raster> ForceTerm<K> for Rigidity {
             *o += *f;
         }
     }
+
+    fn apply_to(
+        &mut self,
+        field: &mut ForceField<K>,
+        input: &[K::Point],
+        out: &mut Vec<K::Point>,
+    ) -> bool {
+        field.apply_bending(input, out);
+        true
+    }
 }
 
 /// The elasticity term of eq. (2): the umbrella `ΔX` along each phase
@@ -93,6 +104,16 @@ impl<K: Raster> ForceTerm<K> for Elasticity {
         for (o, f) in out.iter_mut().zip(&ctx.field.stretching) {
             *o += *f;
         }
+    }
+
+    fn apply_to(
+        &mut self,
+        field: &mut ForceField<K>,
+        input: &[K::Point],
+        out: &mut Vec<K::Point>,
+    ) -> bool {
+        field.apply_umbrella(input, out);
+        true
     }
 }
 
