@@ -437,9 +437,9 @@ impl<K: Raster> ForceField<K> {
             let (acc, sums, x) = (&self.acc[i], &self.slot_sums[i], input(i));
             let mut lap = K::Point::zero();
             let mut m = 0.0;
-            for sl in 0..acc.np {
-                if acc.ncnt[sl] > 0.0 {
-                    lap += sums[sl] * (1.0 / acc.ncnt[sl]) - x;
+            for (&sum, &count) in sums.iter().zip(&acc.ncnt).take(acc.np) {
+                if count > 0.0 {
+                    lap += sum * (1.0 / count) - x;
                     m += 1.0;
                 }
             }
