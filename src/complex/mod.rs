@@ -10,6 +10,7 @@ mod cavity;
 mod class;
 mod export;
 mod ids;
+mod interface;
 mod junction;
 mod measure;
 mod validate;
@@ -19,6 +20,7 @@ pub use cavity::Rejection;
 pub use class::{VertexClass, VertexKind};
 pub use export::MeshArrays;
 pub use ids::{CellId, Label, VertexId};
+pub use interface::InterfaceFacet;
 pub use validate::Finding;
 
 use crate::dim::{Dim, Point, D2, D3};

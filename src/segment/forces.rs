@@ -21,7 +21,7 @@ use super::image::ImageView;
 use super::integrate::PhaseStats;
 use super::params::{ForceModel, JunctionForce};
 use super::raster::Raster;
-use crate::complex::{CellId, Complex, Label, VertexId, VertexKind};
+use crate::complex::{CellId, Complex, InterfaceFacet, Label, VertexId, VertexKind};
 use crate::dim::{Dim, Point};
 
 /// Most phases tracked around one vertex; further ones are ignored.
@@ -261,93 +261,78 @@ impl<K: Raster> ForceField<K> {
 
         // Pass 1: region forces and boundary neighbours, facet by facet.
         let nf = K::N; // corners per facet
-        for c in complex.cell_ids() {
-            let a = complex.label(c);
-            for (i, nb) in complex.neighbours(c).iter().enumerate() {
-                let Some(nb) = *nb else { continue };
-                let b = complex.label(nb);
-                if a == b || nb.index() < c.index() {
-                    continue;
-                }
-                let pts = complex.cell_points(c);
-                let normal = K::facet_normal(&pts[..K::NV], i);
-                let meas = K::facet_measure(&pts[..K::NV], i);
-                self.interface_measure += meas;
-                let verts = complex.cell(c);
-                let mut corners = [VertexId(0); 3];
-                let mut cpts = [K::Point::zero(); 3];
-                let mut n = 0;
-                for k in 0..K::NV {
-                    if k != i {
-                        corners[n] = verts[k];
-                        cpts[n] = pts[k];
-                        n += 1;
+        for facet in complex.interface_facets() {
+            let InterfaceFacet {
+                a,
+                b,
+                corners,
+                points: cpts,
+                normal,
+                measure: meas,
+                ..
+            } = facet;
+            self.interface_measure += meas;
+            self.facets.push(Facet { corners, a, b });
+            // neighbours along the boundaries of a and b
+            #[allow(clippy::needless_range_loop)] // p, q index two parallel arrays
+            for p in 0..nf {
+                for q in 0..nf {
+                    if p == q {
+                        continue;
                     }
-                }
-                self.facets.push(Facet { corners, a, b });
-                // neighbours along the boundaries of a and b
-                #[allow(clippy::needless_range_loop)] // p, q index two parallel arrays
-                for p in 0..nf {
-                    for q in 0..nf {
-                        if p == q {
-                            continue;
-                        }
-                        let acc = &mut self.acc[corners[p].index()];
-                        for l in [a, b] {
-                            if let Some(sl) = acc.slot(l) {
-                                acc.ncnt[sl] += 1.0;
-                            }
+                    let acc = &mut self.acc[corners[p].index()];
+                    for l in [a, b] {
+                        if let Some(sl) = acc.slot(l) {
+                            acc.ncnt[sl] += 1.0;
                         }
                     }
                 }
-                // outward normals per phase at junctions
-                for corner in corners.iter().take(nf) {
-                    let acc = &mut self.acc[corner.index()];
-                    if acc.kind == ForceKind::TripleJunction {
-                        if let Some(sa) = acc.slot(a) {
-                            acc.normal[sa] += normal * meas;
-                        }
-                        if let Some(sb) = acc.slot(b) {
-                            acc.normal[sb] -= normal * meas;
-                        }
-                    }
-                }
-                let (Some(ma), Some(mb)) = (phases.mean_of(a), phases.mean_of(b)) else {
-                    continue;
-                };
-                let gap = ma - mb;
-                if gap.abs() < s.equal_means {
-                    continue; // equal means: eq. (6) undefined, no region force
-                }
-                let acc = &mut self.acc;
-                K::facet_samples(&cpts[..nf], s.spacing, &mut |p, w, ds| {
-                    let intensity = K::sample(image, p);
-                    let f = match s.model {
-                        ForceModel::Normalised => (2.0 * intensity - ma - mb) / gap,
-                        ForceModel::ChanVese => (2.0 * intensity - ma - mb) * gap,
-                    };
-                    for k in 0..nf {
-                        let wk = w[k] * ds;
-                        let ac = &mut acc[corners[k].index()];
-                        match ac.kind {
-                            ForceKind::Interface => {
-                                ac.ext += normal * (f * wk);
-                                ac.share += wk;
-                            }
-                            ForceKind::TripleJunction => {
-                                ac.share += wk;
-                                match s.junction {
-                                    JunctionForce::Paper => {
-                                        junction_weights(ac, phases, intensity, wk)
-                                    }
-                                    JunctionForce::EdgeLocal => ac.ext += normal * (f * wk),
-                                }
-                            }
-                            _ => {}
-                        }
-                    }
-                });
             }
+            // outward normals per phase at junctions
+            for corner in corners.iter().take(nf) {
+                let acc = &mut self.acc[corner.index()];
+                if acc.kind == ForceKind::TripleJunction {
+                    if let Some(sa) = acc.slot(a) {
+                        acc.normal[sa] += normal * meas;
+                    }
+                    if let Some(sb) = acc.slot(b) {
+                        acc.normal[sb] -= normal * meas;
+                    }
+                }
+            }
+            let (Some(ma), Some(mb)) = (phases.mean_of(a), phases.mean_of(b)) else {
+                continue;
+            };
+            let gap = ma - mb;
+            if gap.abs() < s.equal_means {
+                continue; // equal means: eq. (6) undefined, no region force
+            }
+            let acc = &mut self.acc;
+            K::facet_samples(&cpts[..nf], s.spacing, &mut |p, w, ds| {
+                let intensity = K::sample(image, p);
+                let f = match s.model {
+                    ForceModel::Normalised => (2.0 * intensity - ma - mb) / gap,
+                    ForceModel::ChanVese => (2.0 * intensity - ma - mb) * gap,
+                };
+                for k in 0..nf {
+                    let wk = w[k] * ds;
+                    let ac = &mut acc[corners[k].index()];
+                    match ac.kind {
+                        ForceKind::Interface => {
+                            ac.ext += normal * (f * wk);
+                            ac.share += wk;
+                        }
+                        ForceKind::TripleJunction => {
+                            ac.share += wk;
+                            match s.junction {
+                                JunctionForce::Paper => junction_weights(ac, phases, intensity, wk),
+                                JunctionForce::EdgeLocal => ac.ext += normal * (f * wk),
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+            });
         }
 
         // Umbrellas and bending: the boundary Laplacian applied twice.

@@ -119,36 +119,21 @@ impl<K: Raster> ForceContext<'_, '_, K> {
         scratch.clear();
         scratch.resize(cx.vertex_capacity(), 0.0);
         let mut sum = vec![K::Point::zero(); out.len()];
-        for c in cx.cell_ids() {
-            let a = cx.label(c);
-            for (i, nb) in cx.neighbours(c).iter().enumerate() {
-                let Some(nb) = *nb else { continue };
-                let b = cx.label(nb);
-                if a == b || nb.index() < c.index() {
-                    continue;
-                }
-                let pts = cx.cell_points(c);
-                let normal = K::facet_normal(&pts[..K::NV], i);
-                let verts = cx.cell(c);
-                let mut corners = [verts[0]; 3];
-                let mut cpts = [K::Point::zero(); 3];
-                let mut n = 0;
-                for k in 0..K::NV {
-                    if k != i {
-                        corners[n] = verts[k];
-                        cpts[n] = pts[k];
-                        n += 1;
-                    }
-                }
-                K::facet_samples(&cpts[..n], self.params.sample_spacing, &mut |p, w, ds| {
+        let n = K::N;
+        for facet in cx.interface_facets() {
+            let (a, b, normal, corners) = (facet.a, facet.b, facet.normal, facet.corners);
+            K::facet_samples(
+                &facet.points[..n],
+                self.params.sample_spacing,
+                &mut |p, w, ds| {
                     let v = f(p, a, b);
                     for k in 0..n {
                         let wk = w[k] * ds;
                         sum[corners[k].index()] += normal * (v * wk);
                         scratch[corners[k].index()] += wk;
                     }
-                });
-            }
+                },
+            );
         }
         for (i, o) in out.iter_mut().enumerate() {
             if scratch[i] > 0.0 {
