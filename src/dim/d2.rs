@@ -61,6 +61,37 @@ impl Dim for D2 {
         let sin = 2.0 * area * (shortest / (l2[0] * l2[1] * l2[2])).sqrt();
         (sin / SIN_60).clamp(0.0, 1.0)
     }
+    /// Compares the squares, `4·area²·shortest` against
+    /// `(q_min·sin 60°)²·l0²·l1²·l2²`, outside a relative band of 1e-9 (far
+    /// wider than the rounding of either side); inside it, and for NaN,
+    /// [`quality`](Dim::quality) decides, so the answer is always exactly
+    /// `quality(p) >= q_min`. Smoothing asks this of every cell it looks at.
+    #[inline]
+    fn quality_at_least(p: &[Self::Point], q_min: f64) -> bool {
+        if q_min > 1.0 {
+            return false;
+        }
+        let area = Self::signed_measure(p);
+        if area <= 0.0 {
+            return 0.0 >= q_min;
+        }
+        let l2 = [
+            (p[1] - p[2]).norm_squared(),
+            (p[2] - p[0]).norm_squared(),
+            (p[0] - p[1]).norm_squared(),
+        ];
+        let shortest = l2[0].min(l2[1]).min(l2[2]);
+        let lhs = 4.0 * area * area * shortest;
+        let t = q_min * SIN_60;
+        let rhs = t * t * (l2[0] * l2[1] * l2[2]);
+        if lhs >= rhs * (1.0 + 1e-9) {
+            true
+        } else if lhs <= rhs * (1.0 - 1e-9) {
+            q_min <= 0.0
+        } else {
+            Self::quality(p) >= q_min
+        }
+    }
     fn regular_measure(l: f64) -> f64 {
         3f64.sqrt() / 4.0 * l * l
     }
@@ -93,6 +124,21 @@ mod tests {
             *angle = cross.abs().atan2(a.dot(&b));
         }
         out
+    }
+
+    #[test]
+    fn quality_at_least_agrees_with_quality() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..20_000 {
+            let tri: [Vector2<f64>; 3] =
+                std::array::from_fn(|_| Vector2::new(rng.random::<f64>(), rng.random::<f64>()));
+            let q = D2::quality(&tri);
+            // thresholds away from q, at q itself and one ulp either side
+            for t in [0.0, 0.3, 0.8, 1.0, 1.5, q, q.next_up(), q.next_down()] {
+                assert_eq!(D2::quality_at_least(&tri, t), q >= t, "{tri:?} {t}");
+            }
+        }
     }
 
     #[test]

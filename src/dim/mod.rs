@@ -54,6 +54,12 @@ pub trait Dim: sealed::Sealed + Copy + Clone + Debug + Default + Send + Sync + '
     fn signed_measure(p: &[Self::Point]) -> f64;
     /// Shape quality in `[0, 1]`, 1 for the regular simplex, 0 when degenerate.
     fn quality(p: &[Self::Point]) -> f64;
+    /// Whether `quality(p) >= q_min`, exactly; dimensions may answer most
+    /// cases without the square root and division of `quality`.
+    #[inline]
+    fn quality_at_least(p: &[Self::Point], q_min: f64) -> bool {
+        Self::quality(p) >= q_min
+    }
     /// Measure of the regular cell with edge length `l` (A or V of the method doc).
     fn regular_measure(l: f64) -> f64;
     /// Unit normal of the facet opposite corner `opposite`, pointing away from that corner.

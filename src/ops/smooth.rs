@@ -17,11 +17,15 @@ impl<K: Dim> Complex<K> {
             return false;
         }
         self.star_into(v, star);
-        let p = self.position(v);
-        let before = self.min_quality_at(star, v, p);
-        if before >= GOOD_ENOUGH {
+        // Most stars are good: decide that without computing the qualities.
+        if star
+            .iter()
+            .all(|&c| K::quality_at_least(&self.cell_points(c)[..K::NV], GOOD_ENOUGH))
+        {
             return false;
         }
+        let p = self.position(v);
+        let before = self.min_quality_at(star, v, p);
         let mut sum = K::Point::zero();
         let mut n = 0usize;
         for &c in star.iter() {
