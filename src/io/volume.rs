@@ -26,7 +26,7 @@ use std::io::{BufReader, Cursor, Read};
 use std::path::{Path, PathBuf};
 
 use super::atomic::{write_atomic, write_bytes_atomic};
-use super::error::{IoError, Result};
+use super::error::{io_reason, IoError, Result};
 use super::image2::{lerp_nodes, Image2};
 
 /// A 3D grayscale volume (x fastest, then y, then z) with intensities in
@@ -121,7 +121,10 @@ impl Volume {
         let file = File::open(path).map_err(|e| IoError::unreadable(path, e))?;
         let bad = |e: tiff::TiffError| IoError::MalformedTiff {
             path: path.to_path_buf(),
-            reason: e.to_string(),
+            reason: match e {
+                tiff::TiffError::IoError(io) => io_reason(&io),
+                e => e.to_string(),
+            },
         };
         let mut dec = Decoder::new(BufReader::new(file)).map_err(bad)?;
         let spacing = imagej_spacing(&mut dec);
