@@ -452,8 +452,13 @@ fn one_line(e: &clap::Error) -> String {
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
-        // --help and --version are not errors: clap prints them on stdout.
-        Err(e) if !e.use_stderr() => e.exit(),
+        // --help, --version and a bare `dsc-seg` get clap's full text.
+        Err(e)
+            if !e.use_stderr()
+                || e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand =>
+        {
+            e.exit()
+        }
         Err(e) => {
             eprintln!("error: {}", one_line(&e));
             return ExitCode::from(2);

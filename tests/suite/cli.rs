@@ -594,3 +594,22 @@ fn segment3d_init_surface() {
         assert!(!out.join("report.json").exists());
     }
 }
+
+/// Parse errors are one line too, but asking for help (or giving no command)
+/// still gets clap's full text.
+#[test]
+fn help_and_parse_errors() {
+    let o = bin().output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("Usage: dsc-seg"));
+    let o = bin().args(["segment3d", "--help"]).output().unwrap();
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("--edge-length"));
+    let o = bin().args(["segment3d", "--phases", "2"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        err.trim_end(),
+        "error: the following required arguments were not provided: --out <OUT> (see --help)"
+    );
+}
