@@ -24,6 +24,13 @@ fn values(n: usize) -> Vec<u8> {
     v
 }
 
+/// An existing, empty `--out`, so that `fails` checks that nothing lands in it.
+fn empty_out(d: &tempfile::TempDir) -> PathBuf {
+    let out = d.path().join("o");
+    std::fs::create_dir(&out).unwrap();
+    out
+}
+
 fn write_tiff(dir: &Path, name: &str, dims: [usize; 3], data: &[u8]) -> PathBuf {
     let p = dir.join(name);
     save_labels_tiff(&p, dims, data).unwrap();
@@ -54,7 +61,7 @@ fn good_volume_segments() {
     // The control: the volume the other cases corrupt does segment.
     let d = tmp();
     let p = write_tiff(d.path(), "ok.tif", [12; 3], &values(12));
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     let o = bin()
         .arg("segment3d")
         .arg(&p)
@@ -66,12 +73,14 @@ fn good_volume_segments() {
     for f in SEGMENT3D.outputs {
         assert!(out.join(f).is_file(), "{f} missing");
     }
+    let n = std::fs::read_dir(&out).unwrap().count();
+    assert_eq!(n, SEGMENT3D.outputs.len(), "staging left behind");
 }
 
 #[test]
 fn missing_or_unknown_file() {
     let d = tmp();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     for p in [
         "/nonexistent/x.tif",
         "/nonexistent/x.nii",
@@ -86,7 +95,7 @@ fn missing_or_unknown_file() {
 #[test]
 fn corrupt_nifti() {
     let d = tmp();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     // 348 bytes of garbage: no valid sizeof_hdr in either byte order.
     let garbage: Vec<u8> = (0..348u32).map(|i| (i * 97 % 251) as u8 | 1).collect();
     let p = write(d.path(), "garbage.nii", &garbage);
@@ -133,7 +142,7 @@ fn corrupt_nifti() {
 #[test]
 fn corrupt_nifti_gz() {
     let d = tmp();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     let p = write(
         d.path(),
         "bad.nii.gz",
@@ -154,7 +163,7 @@ fn corrupt_nifti_gz() {
 #[test]
 fn corrupt_tiff() {
     let d = tmp();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     let p = write(d.path(), "garbage.tif", b"II*\0garbage garbage garbage");
     fails(&SEGMENT3D, &[&p], &out, "garbage.tif: malformed TIFF");
     let p = write(d.path(), "empty.tif", b"");
@@ -175,7 +184,7 @@ fn corrupt_tiff() {
 #[test]
 fn too_small_volumes() {
     let d = tmp();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     let p = write_tiff(d.path(), "one.tif", [1, 1, 1], &[9]);
     fails(
         &SEGMENT3D,
@@ -195,7 +204,7 @@ fn too_small_volumes() {
 #[test]
 fn constant_volumes() {
     let d = tmp();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     let p = write_tiff(d.path(), "flat8.tif", [10; 3], &[77; 1000]);
     fails(&SEGMENT3D, &[p.to_str().unwrap()], &out, "constant");
     // 16 bit, one value everywhere.
@@ -212,6 +221,17 @@ fn constant_volumes() {
     let p = d.path().join("flat.nii.gz");
     save_nifti(&p, &Volume::from_raw(10, 10, 10, vec![0.25; 1000])).unwrap();
     fails(&SEGMENT3D, &[p.to_str().unwrap()], &out, "constant");
+    // No finite sample at all.
+    for (name, v) in [("nan.nii", f32::NAN), ("inf.nii.gz", f32::INFINITY)] {
+        let p = d.path().join(name);
+        save_nifti(&p, &Volume::from_raw(6, 6, 6, vec![v; 216])).unwrap();
+        fails(
+            &SEGMENT3D,
+            &[p.to_str().unwrap()],
+            &out,
+            "no sample is a finite number",
+        );
+    }
     // Two values and three phases.
     let two: Vec<u8> = (0..1000)
         .map(|i| if i % 2 == 0 { 10 } else { 200 })
@@ -230,7 +250,7 @@ fn bad_numeric_options() {
     let d = tmp();
     let p = write_tiff(d.path(), "v.tif", [12; 3], &values(12));
     let p = p.to_str().unwrap();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     for (opt, v, needle) in [
         ("--edge-length", "NaN", "positive number"),
         ("--edge-length", "inf", "positive number"),
@@ -265,7 +285,7 @@ fn bad_numeric_options() {
 #[test]
 fn bad_phantom_options() {
     let d = tmp();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     fails(
         &SEGMENT3D,
         &["--phantom-size", "0"],
@@ -303,7 +323,7 @@ fn bad_balls() {
     let d = tmp();
     let p = write_tiff(d.path(), "v.tif", [12; 3], &values(12));
     let p = p.to_str().unwrap();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     fails(&SEGMENT3D, &[p, "--init", "balls"], &out, "--ball X,Y,Z,R");
     for (ball, needle) in [
         ("1,2,3", "expected X,Y,Z,R[,PHASE]"),
@@ -332,7 +352,7 @@ fn bad_init_labels() {
     let d = tmp();
     let p = write_tiff(d.path(), "v.tif", [12; 3], &values(12));
     let p = p.to_str().unwrap();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     fails(&SEGMENT3D, &[p, "--init", "labels"], &out, "--init-labels");
     let small = write_tiff(d.path(), "small.tif", [12, 12, 6], &[0; 864]);
     let small = small.to_str().unwrap();
@@ -377,7 +397,7 @@ fn unwritable_out() {
 #[test]
 fn bad_slice_folders() {
     let d = tmp();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     let empty = d.path().join("empty");
     std::fs::create_dir(&empty).unwrap();
     fails(&SEGMENT3D, &[empty.to_str().unwrap()], &out, "empty image");
