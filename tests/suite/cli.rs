@@ -12,6 +12,13 @@ pub(crate) fn tmp() -> tempfile::TempDir {
     tempfile::tempdir().unwrap()
 }
 
+/// An existing, empty `--out`, so that `fails` checks that nothing lands in it.
+pub(crate) fn empty_out(d: &tempfile::TempDir) -> PathBuf {
+    let out = d.path().join("o");
+    std::fs::create_dir(&out).unwrap();
+    out
+}
+
 /// A small noisy two-phase PNG (a bright disk).
 fn write_image(dir: &Path, w: u32, h: u32) -> PathBuf {
     let p = dir.join(format!("img_{w}x{h}.png"));
@@ -218,7 +225,7 @@ fn missing_file() {
     fails(
         &SEGMENT,
         &["/nonexistent/x.png"],
-        &d.path().join("o"),
+        &empty_out(&d),
         "cannot read",
     );
 }
@@ -231,7 +238,7 @@ fn not_an_image() {
     fails(
         &SEGMENT,
         &[p.to_str().unwrap()],
-        &d.path().join("o"),
+        &empty_out(&d),
         "not a readable image",
     );
 }
@@ -247,12 +254,7 @@ fn zero_size_image() {
     bytes.extend([0, 0, 0, 0]);
     let p = d.path().join("empty.png");
     std::fs::write(&p, bytes).unwrap();
-    fails(
-        &SEGMENT,
-        &[p.to_str().unwrap()],
-        &d.path().join("o"),
-        "image",
-    );
+    fails(&SEGMENT, &[p.to_str().unwrap()], &empty_out(&d), "image");
 }
 
 #[test]
@@ -265,7 +267,7 @@ fn truncated_png() {
     fails(
         &SEGMENT,
         &[p.to_str().unwrap()],
-        &d.path().join("o"),
+        &empty_out(&d),
         "cut.png is not a readable image",
     );
 }
@@ -279,7 +281,7 @@ fn corrupt_tiff_header() {
     fails(
         &SEGMENT,
         &[p.to_str().unwrap()],
-        &d.path().join("o"),
+        &empty_out(&d),
         "bad.tif is not a readable image",
     );
 }
@@ -292,12 +294,7 @@ fn constant_16_bit_png() {
     image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(24, 24, image::Luma([40_000u16]))
         .save(&p)
         .unwrap();
-    fails(
-        &SEGMENT,
-        &[p.to_str().unwrap()],
-        &d.path().join("o"),
-        "constant",
-    );
+    fails(&SEGMENT, &[p.to_str().unwrap()], &empty_out(&d), "constant");
 }
 
 #[test]
@@ -307,7 +304,7 @@ fn one_pixel_image() {
     fails(
         &SEGMENT,
         &[p.to_str().unwrap()],
-        &d.path().join("o"),
+        &empty_out(&d),
         "at least 2×2",
     );
 }
@@ -317,7 +314,7 @@ fn bad_edge_lengths() {
     let d = tmp();
     let p = write_image(d.path(), 32, 32);
     let p = p.to_str().unwrap();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     fails(&SEGMENT, &[p, "--edge-length", "NaN"], &out, "edge length");
     fails(&SEGMENT, &[p, "--edge-length", "-2"], &out, "edge length");
     fails(&SEGMENT, &[p, "--edge-length", "0"], &out, "edge length");
@@ -354,7 +351,7 @@ fn bad_numeric_options() {
     let d = tmp();
     let p = write_image(d.path(), 32, 32);
     let p = p.to_str().unwrap();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     for opt in [
         "--rigidity",
         "--elasticity",
@@ -391,7 +388,7 @@ fn bad_numeric_options() {
 #[test]
 fn bad_phantom_options() {
     let d = tmp();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     fails(
         &SEGMENT,
         &["--phantom-size", "0"],
@@ -414,7 +411,7 @@ fn bad_phase_counts() {
     let d = tmp();
     let p = write_image(d.path(), 32, 32);
     let p = p.to_str().unwrap();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     fails(&SEGMENT, &[p, "--phases", "1"], &out, "between 2 and 64");
     fails(&SEGMENT, &[p, "--phases", "65"], &out, "between 2 and 64");
     fails(&SEGMENT, &[p, "--phases", "-3"], &out, "between 2 and 64");
@@ -426,7 +423,7 @@ fn bad_init_labels() {
     let d = tmp();
     let p = write_image(d.path(), 32, 32);
     let p = p.to_str().unwrap();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     let small = write_labels(d.path(), 16, 32, 1);
     fails(
         &SEGMENT,

@@ -1,7 +1,7 @@
 //! `dsc-seg segment3d` on bad input: one clear error line, a non-zero exit,
 //! no panic and nothing written (issue 7). Volumes are tiny so this stays fast.
 
-use crate::cli::{bin, fails, tmp, SEGMENT3D};
+use crate::cli::{bin, empty_out, fails, tmp, SEGMENT3D};
 use dsc_seg::io::{save_labels_tiff, save_nifti, Volume};
 use std::path::{Path, PathBuf};
 
@@ -22,13 +22,6 @@ fn values(n: usize) -> Vec<u8> {
         }
     }
     v
-}
-
-/// An existing, empty `--out`, so that `fails` checks that nothing lands in it.
-fn empty_out(d: &tempfile::TempDir) -> PathBuf {
-    let out = d.path().join("o");
-    std::fs::create_dir(&out).unwrap();
-    out
 }
 
 fn write_tiff(dir: &Path, name: &str, dims: [usize; 3], data: &[u8]) -> PathBuf {
