@@ -12,6 +12,7 @@ use crate::phantom::{self, Phantom2Kind};
 use crate::segment::{ImageView, Init, Raster, SegmentParams, SegmentReport, Segmentation};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
+use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -86,7 +87,6 @@ struct Report<'a> {
     segmentation: &'a SegmentReport,
 }
 
-/// Checks that `dir` can hold our outputs: creates it, then a staging directory in it.
 /// The final mesh as the overlay and VTK writers want it: 2D points,
 /// triangles, and each triangle's phase ranked by increasing mean.
 fn overlay_arrays(seg: &Segmentation<'_, D2>) -> (Vec<[f64; 2]>, Vec<[u32; 3]>, Vec<u32>) {
@@ -130,6 +130,33 @@ pub(crate) fn run_with_progress<K: Raster>(
     report
 }
 
+/// Sides of the 2D phantoms.
+const PHANTOM2_SIZES: RangeInclusive<usize> = 8..=8192;
+
+/// Checks a phantom's side and noise before generating it: a huge side would
+/// exhaust memory, a NaN noise would poison every sample.
+pub(crate) fn check_phantom(
+    what: &str,
+    size: usize,
+    noise: f64,
+    sizes: RangeInclusive<usize>,
+) -> Result<()> {
+    if !sizes.contains(&size) {
+        return Err(Error::Usage(format!(
+            "{what} size {size} must lie in {}..={}",
+            sizes.start(),
+            sizes.end()
+        )));
+    }
+    if !(noise.is_finite() && noise >= 0.0) {
+        return Err(Error::Usage(format!(
+            "noise {noise} must be a non-negative number"
+        )));
+    }
+    Ok(())
+}
+
+/// Checks that `dir` can hold our outputs: creates it, then a staging directory in it.
 pub(crate) fn staging(dir: &Path) -> Result<tempfile::TempDir> {
     let err = |reason: String| Error::OutputDir {
         path: dir.to_path_buf(),
@@ -142,7 +169,8 @@ pub(crate) fn staging(dir: &Path) -> Result<tempfile::TempDir> {
     tempfile::Builder::new()
         .prefix(".dsc-seg-staging-")
         .tempdir_in(dir)
-        .map_err(|e| err(e.to_string()))
+        // The error text would name the random staging path; its kind says it all.
+        .map_err(|e| err(std::io::Error::from(e.kind()).to_string()))
 }
 
 /// Moves every file of the staging directory into `dir`.
@@ -236,6 +264,7 @@ pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
         } => {
             let kind = Phantom2Kind::from_name(name)
                 .ok_or_else(|| Error::Usage(format!("unknown phantom {name:?}")))?;
+            check_phantom("phantom", *size, *noise, PHANTOM2_SIZES)?;
             let ph = kind.generate(*size, *noise, *seed);
             (
                 Image2::from_raw(ph.width, ph.height, ph.image.clone()),
@@ -348,16 +377,7 @@ pub fn run_phantom(
             names.join(", ")
         ))
     })?;
-    if !(8..=8192).contains(&size) {
-        return Err(Error::Usage(format!(
-            "phantom size {size} must lie in 8..=8192"
-        )));
-    }
-    if !(noise.is_finite() && noise >= 0.0) {
-        return Err(Error::Usage(format!(
-            "noise {noise} must be a non-negative number"
-        )));
-    }
+    check_phantom("phantom", size, noise, PHANTOM2_SIZES)?;
     let stage = staging(out)?;
     let ph = kind.generate(size, noise, seed);
     let base = kind.name();

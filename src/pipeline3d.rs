@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::io::{save_labels_tiff, write_bytes_atomic, Volume};
 use crate::phantom::noise::to_u8;
 use crate::phantom::Phantom3Kind;
-use crate::pipeline::{mean_dice, publish, run_with_progress, staging, Source};
+use crate::pipeline::{check_phantom, mean_dice, publish, run_with_progress, staging, Source};
 use crate::segment::{ImageView, Init, SegmentParams, SegmentReport, Segmentation};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -35,6 +35,9 @@ pub struct Segment3dJob {
     /// No progress bar.
     pub quiet: bool,
 }
+
+/// Sides of the 3D phantoms.
+const PHANTOM3_SIZES: std::ops::RangeInclusive<usize> = 8..=1024;
 
 /// Tet quality figures of the final mesh.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
@@ -139,7 +142,9 @@ pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
             noise,
             seed,
         } => {
-            let ph = phantom_kind(name)?.generate(*size, *noise, *seed);
+            let kind = phantom_kind(name)?;
+            check_phantom("3D phantom", *size, *noise, PHANTOM3_SIZES)?;
+            let ph = kind.generate(*size, *noise, *seed);
             (
                 Volume::from_raw(ph.nx, ph.ny, ph.nz, ph.image.clone()),
                 Some(ph.truth),
@@ -254,16 +259,7 @@ pub fn run_phantom3d(
     out: &Path,
 ) -> Result<Vec<String>> {
     let kind = phantom_kind(name)?;
-    if !(8..=1024).contains(&size) {
-        return Err(Error::Usage(format!(
-            "3D phantom size {size} must lie in 8..=1024"
-        )));
-    }
-    if !(noise.is_finite() && noise >= 0.0) {
-        return Err(Error::Usage(format!(
-            "noise {noise} must be a non-negative number"
-        )));
-    }
+    check_phantom("3D phantom", size, noise, PHANTOM3_SIZES)?;
     let stage = staging(out)?;
     let ph = kind.generate(size, noise, seed);
     let base = kind.name();

@@ -49,6 +49,7 @@ enum Init3Kind {
 }
 
 #[derive(Parser, Debug)]
+#[command(allow_negative_numbers = true)]
 struct Segment3dArgs {
     /// Input volume: a multi-page TIFF stack (8/16 bit), a folder of 2D slices, or
     /// NIfTI (.nii, .nii.gz). Without it, a built-in 3D phantom is segmented.
@@ -111,6 +112,7 @@ struct Segment3dArgs {
 }
 
 #[derive(Parser, Debug)]
+#[command(allow_negative_numbers = true)]
 struct Phantom3dArgs {
     /// two_balls, torus or hollow_sphere.
     name: String,
@@ -146,6 +148,7 @@ enum InitKind {
 }
 
 #[derive(Parser, Debug)]
+#[command(allow_negative_numbers = true)]
 struct SegmentArgs {
     /// Input image (PNG, TIFF, JPEG, ...; 8/16 bit, gray or colour). Without it, a built-in phantom is segmented.
     image: Option<PathBuf>,
@@ -212,6 +215,7 @@ struct SegmentArgs {
 }
 
 #[derive(Parser, Debug)]
+#[command(allow_negative_numbers = true)]
 struct PhantomArgs {
     /// two_phase, four_phase, fig2, fig3, fig4, fig5 or fig6.
     name: String,
@@ -430,8 +434,37 @@ fn print_summary(report: &dsc_seg::segment::SegmentReport, cells: &str, out: &st
     );
 }
 
+/// A command-line parse error as one line, like every other error: clap's
+/// first paragraph (its usage and tips follow a blank line) with the lines joined.
+fn one_line(e: &clap::Error) -> String {
+    let text = e.to_string();
+    let first: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .map(str::trim)
+        .collect();
+    let msg = first.join(" ");
+    format!(
+        "{} (see --help)",
+        msg.strip_prefix("error: ").unwrap_or(&msg)
+    )
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        // --help, --version and a bare `dsc-seg` get clap's full text.
+        Err(e)
+            if !e.use_stderr()
+                || e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand =>
+        {
+            e.exit()
+        }
+        Err(e) => {
+            eprintln!("error: {}", one_line(&e));
+            return ExitCode::from(2);
+        }
+    };
     let result = match cli.command {
         Command::Segment(a) => segment(a),
         Command::Phantom(a) => run_phantom(&a.name, a.size, a.noise, a.seed, &a.out).map(|names| {

@@ -131,6 +131,16 @@ impl IoError {
     }
 }
 
+/// A decoder's I/O error as a reason for the user: running out of bytes
+/// ("failed to fill whole buffer") means the file is truncated.
+pub(crate) fn io_reason(e: &std::io::Error) -> String {
+    if e.kind() == std::io::ErrorKind::UnexpectedEof {
+        "the file ends early (truncated?)".into()
+    } else {
+        e.to_string()
+    }
+}
+
 /// Result alias for [`IoError`].
 pub type Result<T> = std::result::Result<T, IoError>;
 

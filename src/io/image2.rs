@@ -24,7 +24,7 @@ use std::path::Path;
 use image::{DynamicImage, ImageError, ImageReader};
 
 use super::atomic::write_atomic;
-use super::error::{IoError, Result};
+use super::error::{io_reason, IoError, Result};
 
 /// Rec. 709 luminance weights for R, G, B.
 const REC709: [f32; 3] = [0.2126, 0.7152, 0.0722];
@@ -220,6 +220,10 @@ pub(crate) fn image_error(path: &Path, e: ImageError) -> IoError {
         ImageError::IoError(io) if io.kind() != io::ErrorKind::UnexpectedEof => {
             IoError::unreadable(path, io)
         }
+        ImageError::IoError(io) => IoError::NotAnImage {
+            path: path.to_path_buf(),
+            reason: io_reason(&io),
+        },
         other => IoError::NotAnImage {
             path: path.to_path_buf(),
             reason: other.to_string(),

@@ -17,7 +17,8 @@
 //! unsigned 16-bit data by 65535. Every other sample type (signed integers,
 //! 32-bit integers, floats, or NIfTI data with a non-trivial
 //! `scl_slope`/`scl_inter`) is mapped linearly by the data's own minimum and
-//! maximum to `[0,1]` (a constant volume becomes all zeros; NaNs become 0).
+//! maximum to `[0,1]` (a constant volume becomes all zeros; NaNs become 0;
+//! data without a single finite sample is an error).
 //! Slices loaded from a folder follow [`Image2::load`] per slice.
 
 use std::cmp::Ordering;
@@ -26,7 +27,7 @@ use std::io::{BufReader, Cursor, Read};
 use std::path::{Path, PathBuf};
 
 use super::atomic::{write_atomic, write_bytes_atomic};
-use super::error::{IoError, Result};
+use super::error::{io_reason, IoError, Result};
 use super::image2::{lerp_nodes, Image2};
 
 /// A 3D grayscale volume (x fastest, then y, then z) with intensities in
@@ -121,7 +122,10 @@ impl Volume {
         let file = File::open(path).map_err(|e| IoError::unreadable(path, e))?;
         let bad = |e: tiff::TiffError| IoError::MalformedTiff {
             path: path.to_path_buf(),
-            reason: e.to_string(),
+            reason: match e {
+                tiff::TiffError::IoError(io) => io_reason(&io),
+                e => e.to_string(),
+            },
         };
         let mut dec = Decoder::new(BufReader::new(file)).map_err(bad)?;
         let spacing = imagej_spacing(&mut dec);
@@ -195,7 +199,10 @@ impl Volume {
             nx,
             ny,
             nz,
-            data: raw.normalise(),
+            data: raw.normalise().ok_or_else(|| IoError::MalformedTiff {
+                path: path.to_path_buf(),
+                reason: NO_FINITE.into(),
+            })?,
             spacing,
         })
     }
@@ -391,10 +398,11 @@ impl Samples {
         }
     }
 
-    fn normalise(self) -> Vec<f32> {
+    /// `None` when no sample is finite (see [`min_max_normalise`]).
+    fn normalise(self) -> Option<Vec<f32>> {
         match self {
-            Samples::U8(v) => v.into_iter().map(|s| s as f32 / 255.0).collect(),
-            Samples::U16(v) => v.into_iter().map(|s| s as f32 / 65535.0).collect(),
+            Samples::U8(v) => Some(v.into_iter().map(|s| s as f32 / 255.0).collect()),
+            Samples::U16(v) => Some(v.into_iter().map(|s| s as f32 / 65535.0).collect()),
             Samples::F64(v) => min_max_normalise(&v),
         }
     }
@@ -423,16 +431,21 @@ fn append_f64(v: &mut Vec<f64>, page: tiff::decoder::DecodingResult) -> bool {
 }
 
 /// Maps values linearly so that the finite minimum becomes 0 and the maximum
-/// 1; constant data becomes 0, NaN becomes 0.
-fn min_max_normalise(v: &[f64]) -> Vec<f32> {
+/// 1; constant data becomes 0, NaN becomes 0. `None` when no value is finite:
+/// such data holds no image, and all zeros would pass it off as a constant one.
+fn min_max_normalise(v: &[f64]) -> Option<Vec<f32>> {
     let (lo, hi) = v
         .iter()
         .filter(|s| s.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &s| {
             (lo.min(s), hi.max(s))
         });
+    if lo > hi {
+        return None;
+    }
     let range = hi - lo;
-    v.iter()
+    let data = v
+        .iter()
         .map(|&s| {
             if range.is_nan() || range <= 0.0 || s.is_nan() {
                 0.0
@@ -440,7 +453,8 @@ fn min_max_normalise(v: &[f64]) -> Vec<f32> {
                 ((s - lo) / range).clamp(0.0, 1.0) as f32
             }
         })
-        .collect()
+        .collect();
+    Some(data)
 }
 
 /// Compares strings in natural order: runs of ASCII digits compare by
@@ -484,6 +498,9 @@ pub(crate) fn natural_cmp(a: &str, b: &str) -> Ordering {
         }
     }
 }
+
+/// Why data without one finite sample is refused.
+const NO_FINITE: &str = "no sample is a finite number (all NaN or infinite)";
 
 /// Size of a NIfTI-1 header.
 const NIFTI_HDR: usize = 348;
@@ -624,7 +641,7 @@ fn parse_nifti(path: &Path, b: &[u8]) -> Result<Volume> {
                     }
                 })
                 .collect();
-            min_max_normalise(&values)
+            min_max_normalise(&values).ok_or_else(|| bad(NO_FINITE.into()))?
         }
     };
     // Axes beyond `dim[0]` do not exist in the file: unit spacing.

@@ -180,8 +180,18 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             return Err(SegmentError::EmptyImage);
         }
         let (w, h) = (image.width(), image.height());
-        if image.dims.iter().take(K::N).any(|&d| d < 2) {
-            return Err(SegmentError::ImageTooSmall(w, h));
+        let dims = &image.dims[..K::N];
+        if dims.iter().any(|&d| d < 2) {
+            let size: Vec<String> = dims.iter().map(|d| d.to_string()).collect();
+            let (unit, min) = if K::N == 2 {
+                ("pixels", "2×2")
+            } else {
+                ("voxels", "2×2×2")
+            };
+            return Err(SegmentError::ImageTooSmall(
+                format!("{} {unit}", size.join("×")),
+                min,
+            ));
         }
         params.validate_dims(image.dims)?;
         let range = image.range().ok_or(SegmentError::NonFinite)?;

@@ -9,14 +9,15 @@ pub enum SegmentError {
     /// The image has no pixels.
     #[error("the image is empty")]
     EmptyImage,
-    /// The image is too small to hold a mesh.
-    #[error("the image is {0}×{1} pixels; at least 2×2 is needed")]
-    ImageTooSmall(usize, usize),
+    /// The image is too small to hold a mesh: its size and the smallest
+    /// size, e.g. `1×1×1 voxels` and `2×2×2`.
+    #[error("the image is {0}; at least {1} is needed")]
+    ImageTooSmall(String, &'static str),
     /// A sample is NaN or infinite.
     #[error("the image contains a non-finite value")]
     NonFinite,
     /// All pixels have the same value: there is nothing to separate.
-    #[error("the image is constant ({0}); there is nothing to segment")]
+    #[error("the image is constant ({0:.4}); there is nothing to segment")]
     ConstantImage(f64),
     /// Fewer distinct intensities than phases.
     #[error("the image has only {distinct} distinct intensities, fewer than the {phases} phases asked for")]
@@ -29,12 +30,12 @@ pub enum SegmentError {
     /// The number of phases is out of range.
     #[error("the number of phases must be between 2 and 64, not {0}")]
     Phases(usize),
-    /// A bad edge length.
-    #[error("edge length {0}: {1}")]
+    /// A bad edge length (`{:?}` keeps 1e-9 and 1e300 short).
+    #[error("edge length {0:?}: {1}")]
     EdgeLength(f64, String),
-    /// Another parameter is out of range.
-    #[error("parameter {0} = {1} is out of range")]
-    Param(&'static str, f64),
+    /// Another parameter is out of range: its name, value and valid range.
+    #[error("parameter {0} = {1:?} is out of range: {2}")]
+    Param(&'static str, f64, &'static str),
     /// Eq. (5) is defined for two phases only.
     #[error("the Chan–Vese force (eq. 5) needs exactly 2 phases, not {0}")]
     ChanVeseNeedsTwoPhases(usize),

@@ -250,40 +250,63 @@ impl SegmentParams {
                 ));
             }
         }
-        let check = |name: &'static str, v: f64, ok: bool| {
+        let check = |name: &'static str, v: f64, ok: bool, range: &'static str| {
             if ok && v.is_finite() {
                 Ok(())
             } else {
-                Err(SegmentError::Param(name, v))
+                Err(SegmentError::Param(name, v, range))
             }
         };
-        check("rigidity", self.rigidity, self.rigidity >= 0.0)?;
-        check("elasticity", self.elasticity, self.elasticity >= 0.0)?;
+        let non_negative = "must be a finite number ≥ 0";
+        check(
+            "rigidity",
+            self.rigidity,
+            self.rigidity >= 0.0,
+            non_negative,
+        )?;
+        check(
+            "elasticity",
+            self.elasticity,
+            self.elasticity >= 0.0,
+            non_negative,
+        )?;
         check(
             "step_fraction",
             self.step_fraction,
             self.step_fraction > 0.0 && self.step_fraction <= 0.5,
+            "must lie in (0, 0.5]",
         )?;
         check(
             "converge_displacement",
             self.converge_displacement,
             self.converge_displacement >= 0.0,
+            non_negative,
         )?;
         check(
             "length_weight",
             self.length_weight,
             self.length_weight >= 0.0,
+            non_negative,
         )?;
         check(
             "sample_spacing",
             self.sample_spacing,
             self.sample_spacing > 0.0 && self.sample_spacing <= 16.0,
+            "must lie in (0, 16]",
         )?;
         if self.flip_interval == 0 {
-            return Err(SegmentError::Param("flip_interval", 0.0));
+            return Err(SegmentError::Param(
+                "flip_interval",
+                0.0,
+                "must be at least 1",
+            ));
         }
         if self.max_iterations == 0 {
-            return Err(SegmentError::Param("max_iterations", 0.0));
+            return Err(SegmentError::Param(
+                "max_iterations",
+                0.0,
+                "must be at least 1",
+            ));
         }
         if self.force == ForceModel::ChanVese && self.phases != 2 {
             return Err(SegmentError::ChanVeseNeedsTwoPhases(self.phases));

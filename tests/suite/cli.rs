@@ -4,12 +4,19 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn bin() -> Command {
+pub(crate) fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_dsc-seg"))
 }
 
-fn tmp() -> tempfile::TempDir {
+pub(crate) fn tmp() -> tempfile::TempDir {
     tempfile::tempdir().unwrap()
+}
+
+/// An existing, empty `--out`, so that `fails` checks that nothing lands in it.
+pub(crate) fn empty_out(d: &tempfile::TempDir) -> PathBuf {
+    let out = d.path().join("o");
+    std::fs::create_dir(&out).unwrap();
+    out
 }
 
 /// A small noisy two-phase PNG (a bright disk).
@@ -35,18 +42,42 @@ fn write_labels(dir: &Path, w: u32, h: u32, value: u8) -> PathBuf {
     p
 }
 
-/// Runs `dsc-seg segment` with `args`, expects failure with a one-line
-/// `error: ...` mentioning `needle`, and an output directory without outputs.
-fn fails(args: &[&str], out: &Path, needle: &str) {
+/// A subcommand and the outputs it writes on success.
+pub(crate) struct Sub {
+    pub name: &'static str,
+    pub outputs: &'static [&'static str],
+}
+
+pub(crate) const SEGMENT: Sub = Sub {
+    name: "segment",
+    outputs: &[
+        "labels.png",
+        "overlay.png",
+        "overlay.svg",
+        "mesh.vtu",
+        "report.json",
+    ],
+};
+
+pub(crate) const SEGMENT3D: Sub = Sub {
+    name: "segment3d",
+    outputs: &["labels.tif", "mesh.vtu", "interface.vtp", "report.json"],
+};
+
+/// Runs `dsc-seg SUB ARGS --out OUT --quiet`, expects failure with exactly one
+/// stderr line `error: ...` mentioning `needle` (no panic), and an output
+/// directory holding none of the outputs and nothing else. Returns the line.
+pub(crate) fn fails(sub: &Sub, args: &[&str], out: &Path, needle: &str) -> String {
     let o: Output = bin()
-        .arg("segment")
+        .arg(sub.name)
         .args(args)
         .arg("--out")
         .arg(out)
         .arg("--quiet")
         .output()
         .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    eprintln!("{} {args:?} -> {}", sub.name, err.trim_end());
     assert!(!o.status.success(), "succeeded: {args:?}");
     assert!(err.starts_with("error: "), "stderr: {err}");
     assert_eq!(err.trim_end().lines().count(), 1, "stderr: {err}");
@@ -54,20 +85,32 @@ fn fails(args: &[&str], out: &Path, needle: &str) {
         err.to_lowercase().contains(&needle.to_lowercase()),
         "{args:?}: {err} lacks {needle:?}"
     );
-    assert!(!err.contains("panicked"));
+    assert!(!err.contains("panicked"), "{err}");
     if out.is_dir() {
-        for f in [
-            "labels.png",
-            "overlay.png",
-            "overlay.svg",
-            "mesh.vtu",
-            "report.json",
-        ] {
+        for f in sub.outputs {
             assert!(!out.join(f).exists(), "{f} written despite the error");
         }
         let leftovers: Vec<_> = std::fs::read_dir(out).unwrap().collect();
         assert!(leftovers.is_empty(), "left behind {leftovers:?}");
     }
+    err
+}
+
+/// A directory this process cannot write into (mode 0o555), or `None` when
+/// permissions are not enforced (as for root), where the case cannot be tested.
+#[cfg(unix)]
+pub(crate) fn read_only_dir(parent: &Path) -> Option<PathBuf> {
+    use std::os::unix::fs::PermissionsExt;
+    let d = parent.join("read_only");
+    std::fs::create_dir(&d).unwrap();
+    std::fs::set_permissions(&d, std::fs::Permissions::from_mode(0o555)).unwrap();
+    let probe = d.join("probe");
+    if std::fs::write(&probe, "x").is_ok() {
+        std::fs::remove_file(&probe).unwrap();
+        eprintln!("permissions not enforced (root?): read-only --out not tested");
+        return None;
+    }
+    Some(d)
 }
 
 #[test]
@@ -179,7 +222,12 @@ fn phantom_subcommand_writes_image_and_truth() {
 #[test]
 fn missing_file() {
     let d = tmp();
-    fails(&["/nonexistent/x.png"], &d.path().join("o"), "cannot read");
+    fails(
+        &SEGMENT,
+        &["/nonexistent/x.png"],
+        &empty_out(&d),
+        "cannot read",
+    );
 }
 
 #[test]
@@ -188,8 +236,9 @@ fn not_an_image() {
     let p = d.path().join("text.png");
     std::fs::write(&p, "hello, not a picture").unwrap();
     fails(
+        &SEGMENT,
         &[p.to_str().unwrap()],
-        &d.path().join("o"),
+        &empty_out(&d),
         "not a readable image",
     );
 }
@@ -205,14 +254,59 @@ fn zero_size_image() {
     bytes.extend([0, 0, 0, 0]);
     let p = d.path().join("empty.png");
     std::fs::write(&p, bytes).unwrap();
-    fails(&[p.to_str().unwrap()], &d.path().join("o"), "image");
+    fails(&SEGMENT, &[p.to_str().unwrap()], &empty_out(&d), "image");
+}
+
+#[test]
+fn truncated_png() {
+    let d = tmp();
+    let good = write_image(d.path(), 32, 32);
+    let bytes = std::fs::read(&good).unwrap();
+    let p = d.path().join("cut.png");
+    std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
+    fails(
+        &SEGMENT,
+        &[p.to_str().unwrap()],
+        &empty_out(&d),
+        "cut.png is not a readable image",
+    );
+}
+
+#[test]
+fn corrupt_tiff_header() {
+    let d = tmp();
+    let p = d.path().join("bad.tif");
+    // Little-endian TIFF magic, then a first-IFD offset far past the end.
+    std::fs::write(&p, b"II*\0\xff\xff\xff\x7fgarbage").unwrap();
+    fails(
+        &SEGMENT,
+        &[p.to_str().unwrap()],
+        &empty_out(&d),
+        "bad.tif is not a readable image",
+    );
+}
+
+/// A 16-bit image with one value everywhere has nothing to separate.
+#[test]
+fn constant_16_bit_png() {
+    let d = tmp();
+    let p = d.path().join("flat16.png");
+    image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(24, 24, image::Luma([40_000u16]))
+        .save(&p)
+        .unwrap();
+    fails(&SEGMENT, &[p.to_str().unwrap()], &empty_out(&d), "constant");
 }
 
 #[test]
 fn one_pixel_image() {
     let d = tmp();
     let p = write_image(d.path(), 1, 1);
-    fails(&[p.to_str().unwrap()], &d.path().join("o"), "at least 2×2");
+    fails(
+        &SEGMENT,
+        &[p.to_str().unwrap()],
+        &empty_out(&d),
+        "at least 2×2",
+    );
 }
 
 #[test]
@@ -220,11 +314,96 @@ fn bad_edge_lengths() {
     let d = tmp();
     let p = write_image(d.path(), 32, 32);
     let p = p.to_str().unwrap();
-    let out = d.path().join("o");
-    fails(&[p, "--edge-length", "NaN"], &out, "edge length");
-    fails(&[p, "--edge-length", "-2"], &out, "edge length");
-    fails(&[p, "--edge-length", "0"], &out, "edge length");
-    fails(&[p, "--edge-length", "33"], &out, "must not exceed");
+    let out = empty_out(&d);
+    fails(&SEGMENT, &[p, "--edge-length", "NaN"], &out, "edge length");
+    fails(&SEGMENT, &[p, "--edge-length", "-2"], &out, "edge length");
+    fails(&SEGMENT, &[p, "--edge-length", "0"], &out, "edge length");
+    fails(
+        &SEGMENT,
+        &[p, "--edge-length", "33"],
+        &out,
+        "must not exceed",
+    );
+    fails(
+        &SEGMENT,
+        &[p, "--edge-length", "inf"],
+        &out,
+        "positive number",
+    );
+    fails(
+        &SEGMENT,
+        &[p, "--edge-length", "1e-9"],
+        &out,
+        "at least 1 pixel",
+    );
+    fails(
+        &SEGMENT,
+        &[p, "--edge-length", "1e9"],
+        &out,
+        "must not exceed",
+    );
+}
+
+/// NaN, infinite and out-of-range values of every float option, and absurd
+/// counts, are refused before any work.
+#[test]
+fn bad_numeric_options() {
+    let d = tmp();
+    let p = write_image(d.path(), 32, 32);
+    let p = p.to_str().unwrap();
+    let out = empty_out(&d);
+    for opt in [
+        "--rigidity",
+        "--elasticity",
+        "--step-fraction",
+        "--length-weight",
+    ] {
+        let name = opt.trim_start_matches("--").replace('-', "_");
+        for v in ["NaN", "inf", "-inf", "-1", "1e300"] {
+            if v == "1e300" && opt != "--step-fraction" {
+                continue; // a huge weight is allowed, only pointless
+            }
+            fails(&SEGMENT, &[p, opt, v], &out, &name);
+        }
+    }
+    fails(
+        &SEGMENT,
+        &[p, "--max-iterations", "0"],
+        &out,
+        "max_iterations",
+    );
+    // Values clap cannot parse get the same one-line error.
+    fails(
+        &SEGMENT,
+        &[p, "--max-iterations", "-1"],
+        &out,
+        "--max-iterations",
+    );
+    fails(&SEGMENT, &[p, "--phases", "two"], &out, "--phases");
+    fails(&SEGMENT, &[p, "--init", "bogus"], &out, "possible values");
+    fails(&SEGMENT, &[p, "--no-such-option"], &out, "--no-such-option");
+}
+
+/// Phantom sizes and noise are checked before a phantom is generated.
+#[test]
+fn bad_phantom_options() {
+    let d = tmp();
+    let out = empty_out(&d);
+    fails(
+        &SEGMENT,
+        &["--phantom-size", "0"],
+        &out,
+        "must lie in 8..=8192",
+    );
+    fails(
+        &SEGMENT,
+        &["--phantom-size", "100000"],
+        &out,
+        "must lie in 8..=8192",
+    );
+    fails(&SEGMENT, &["--phantom-noise", "NaN"], &out, "non-negative");
+    fails(&SEGMENT, &["--phantom-noise=-0.1"], &out, "non-negative");
+    fails(&SEGMENT, &["--phantom", "nope"], &out, "unknown phantom");
 }
 
 #[test]
@@ -232,10 +411,11 @@ fn bad_phase_counts() {
     let d = tmp();
     let p = write_image(d.path(), 32, 32);
     let p = p.to_str().unwrap();
-    let out = d.path().join("o");
-    fails(&[p, "--phases", "1"], &out, "between 2 and 64");
-    fails(&[p, "--phases", "65"], &out, "between 2 and 64");
-    fails(&[p, "--phases", "-3"], &out, "between 2 and 64");
+    let out = empty_out(&d);
+    fails(&SEGMENT, &[p, "--phases", "1"], &out, "between 2 and 64");
+    fails(&SEGMENT, &[p, "--phases", "65"], &out, "between 2 and 64");
+    fails(&SEGMENT, &[p, "--phases", "-3"], &out, "between 2 and 64");
+    fails(&SEGMENT, &[p, "--phases", "255"], &out, "between 2 and 64");
 }
 
 #[test]
@@ -243,9 +423,10 @@ fn bad_init_labels() {
     let d = tmp();
     let p = write_image(d.path(), 32, 32);
     let p = p.to_str().unwrap();
-    let out = d.path().join("o");
+    let out = empty_out(&d);
     let small = write_labels(d.path(), 16, 32, 1);
     fails(
+        &SEGMENT,
         &[
             p,
             "--init",
@@ -258,6 +439,7 @@ fn bad_init_labels() {
     );
     let many = write_labels(d.path(), 32, 32, 2);
     fails(
+        &SEGMENT,
         &[
             p,
             "--init",
@@ -268,9 +450,14 @@ fn bad_init_labels() {
         &out,
         "below the number of phases",
     );
-    fails(&[p, "--init", "labels"], &out, "--init-labels");
-    fails(&[p, "--init", "disks"], &out, "--disk");
-    fails(&[p, "--init", "disks", "--disk", "1,2"], &out, "X,Y,R");
+    fails(&SEGMENT, &[p, "--init", "labels"], &out, "--init-labels");
+    fails(&SEGMENT, &[p, "--init", "disks"], &out, "--disk");
+    fails(
+        &SEGMENT,
+        &[p, "--init", "disks", "--disk", "1,2"],
+        &out,
+        "X,Y,R",
+    );
     // a good label image works
     let ok = write_labels(d.path(), 32, 32, 1);
     let o = bin()
@@ -297,12 +484,23 @@ fn unwritable_out() {
     let p = write_image(d.path(), 32, 32);
     let file = d.path().join("a_file");
     std::fs::write(&file, "x").unwrap();
-    fails(&[p.to_str().unwrap()], &file, "output directory");
+    fails(&SEGMENT, &[p.to_str().unwrap()], &file, "output directory");
     fails(
+        &SEGMENT,
         &[p.to_str().unwrap()],
         &file.join("sub"),
         "output directory",
     );
+    #[cfg(unix)]
+    if let Some(ro) = read_only_dir(d.path()) {
+        fails(&SEGMENT, &[p.to_str().unwrap()], &ro, "permission denied");
+        fails(
+            &SEGMENT,
+            &[p.to_str().unwrap()],
+            &ro.join("sub"),
+            "permission denied",
+        );
+    }
 }
 
 /// A cube surface `[lo, hi]³` as an OFF file (12 consistently oriented triangles).
@@ -392,4 +590,23 @@ fn segment3d_init_surface() {
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");
         assert!(!out.join("report.json").exists());
     }
+}
+
+/// Parse errors are one line too, but asking for help (or giving no command)
+/// still gets clap's full text.
+#[test]
+fn help_and_parse_errors() {
+    let o = bin().output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("Usage: dsc-seg"));
+    let o = bin().args(["segment3d", "--help"]).output().unwrap();
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("--edge-length"));
+    let o = bin().args(["segment3d", "--phases", "2"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        err.trim_end(),
+        "error: the following required arguments were not provided: --out <OUT> (see --help)"
+    );
 }

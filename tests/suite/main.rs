@@ -1,6 +1,7 @@
 //! All integration tests in one binary (one link, shared helpers).
 
 mod cli;
+mod cli3d;
 mod common;
 mod determinism;
 mod dsc2d;
