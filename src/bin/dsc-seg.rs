@@ -63,9 +63,6 @@ struct Segment3dArgs {
     /// Average edge length L of the mesh in voxels [default: min side/64 clamped to 3..8].
     #[arg(long, allow_hyphen_values = true)]
     edge_length: Option<f64>,
-    /// Iteration cap.
-    #[arg(long, default_value_t = 500)]
-    max_iterations: usize,
     /// Initialisation.
     #[arg(long, value_enum, default_value_t = Init3Kind::Range)]
     init: Init3Kind,
@@ -85,15 +82,8 @@ struct Segment3dArgs {
     /// replaces --init. Needs a build with `--features tetgen` (AGPL-3 TetGen).
     #[arg(long, value_name = "FILE")]
     init_surface: Option<PathBuf>,
-    /// Keep every cell's label: only the interfaces move.
-    #[arg(long)]
-    no_label_flips: bool,
-    /// Try label flips every K iterations [default: the 3D default of SegmentParams::new_3d].
-    #[arg(long, value_name = "K")]
-    flip_interval: Option<usize>,
-    /// Rigidity weight β of eq. (2).
-    #[arg(long, allow_hyphen_values = true)]
-    rigidity: Option<f64>,
+    #[command(flatten)]
+    evolution: EvolutionArgs,
     /// Built-in 3D phantom to segment when no VOLUME is given.
     #[arg(long, default_value = "two_balls")]
     phantom: String,
@@ -130,6 +120,87 @@ struct Phantom3dArgs {
     out: PathBuf,
 }
 
+/// The evolution's options, shared by `segment` and `segment3d`.
+#[derive(clap::Args, Debug)]
+struct EvolutionArgs {
+    /// Iteration cap.
+    #[arg(long, default_value_t = 500)]
+    max_iterations: usize,
+    /// Keep every cell's label: only the interfaces move.
+    #[arg(long)]
+    no_label_flips: bool,
+    /// Try label flips every K iterations [default: 1 in 2D, 20 in 3D].
+    #[arg(long, value_name = "K")]
+    flip_interval: Option<usize>,
+    /// Rigidity weight β of eq. (2).
+    #[arg(long, allow_hyphen_values = true)]
+    rigidity: Option<f64>,
+    /// Elasticity weight α of eq. (2) (off by default, as in the paper).
+    #[arg(long, allow_hyphen_values = true)]
+    elasticity: Option<f64>,
+    /// Largest displacement per iteration as a fraction of L.
+    #[arg(long, allow_hyphen_values = true)]
+    step_fraction: Option<f64>,
+    /// Triple-junction force of eq. (7): `edge-local` (the default: each
+    /// sample bracketed by its own edge's phases) or `paper` (literal: the
+    /// junction's phases bracket every sample; grows wedges on blurred edges).
+    #[arg(long, value_enum)]
+    junction_force: Option<JunctionArg>,
+    /// Weight of the length (3D: area) term of the Mumford–Shah energy, as a
+    /// multiple of the smallest gap between phase means.
+    #[arg(long, allow_hyphen_values = true)]
+    length_weight: Option<f64>,
+}
+
+impl EvolutionArgs {
+    /// Overrides the defaults in `p` with every option given.
+    fn apply(&self, p: &mut SegmentParams) {
+        p.max_iterations = self.max_iterations;
+        p.label_flips = !self.no_label_flips;
+        let set = |field: &mut f64, v: Option<f64>| *field = v.unwrap_or(*field);
+        set(&mut p.rigidity, self.rigidity);
+        set(&mut p.elasticity, self.elasticity);
+        set(&mut p.step_fraction, self.step_fraction);
+        set(&mut p.length_weight, self.length_weight);
+        p.flip_interval = self.flip_interval.unwrap_or(p.flip_interval);
+        if let Some(j) = self.junction_force {
+            p.junction_force = match j {
+                JunctionArg::Paper => JunctionForce::Paper,
+                JunctionArg::EdgeLocal => JunctionForce::EdgeLocal,
+            };
+        }
+    }
+}
+
+/// The number of phases, `default` when not given.
+fn phase_count(given: Option<i64>, default: usize) -> Result<usize, Error> {
+    match given {
+        None => Ok(default),
+        Some(n) if (2..=64).contains(&n) => Ok(n as usize),
+        Some(n) => Err(Error::Usage(format!(
+            "--phases {n}: the number of phases must be between 2 and 64"
+        ))),
+    }
+}
+
+/// The comma-separated numbers of a `--disk`/`--ball` value: `fixed` of
+/// them, then optionally a phase (a whole number ≥ 0; 1 when absent).
+fn parse_shape(s: &str, option: &str, fixed: usize, form: &str) -> Result<(Vec<f64>, u32), Error> {
+    let bad = || Error::Usage(format!("{option} {s:?}: expected {form}"));
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    let phase = match v.get(fixed) {
+        _ if v.len() < fixed || v.len() > fixed + 1 => return Err(bad()),
+        None => 1,
+        Some(&p) if p >= 0.0 && p.fract() == 0.0 => p as u32,
+        Some(_) => return Err(bad()),
+    };
+    Ok((v[..fixed].to_vec(), phase))
+}
+
 /// `--junction-force` values.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum JunctionArg {
@@ -161,9 +232,6 @@ struct SegmentArgs {
     /// Average edge length L of the mesh in pixels [default: min(W,H)/64·sqrt(N-1) clamped to 3..10].
     #[arg(long, allow_hyphen_values = true)]
     edge_length: Option<f64>,
-    /// Iteration cap.
-    #[arg(long, default_value_t = 500)]
-    max_iterations: usize,
     /// Initialisation.
     #[arg(long, value_enum, default_value_t = InitKind::Range)]
     init: InitKind,
@@ -177,26 +245,8 @@ struct SegmentArgs {
     /// Label PNG for --init labels (same size as the image, values 0..N-1).
     #[arg(long)]
     init_labels: Option<PathBuf>,
-    /// Keep every cell's label: only the interfaces move.
-    #[arg(long)]
-    no_label_flips: bool,
-    /// Rigidity weight β of eq. (2).
-    #[arg(long, allow_hyphen_values = true)]
-    rigidity: Option<f64>,
-    /// Elasticity weight α of eq. (2) (off by default, as in the paper).
-    #[arg(long, allow_hyphen_values = true)]
-    elasticity: Option<f64>,
-    /// Largest displacement per iteration as a fraction of L.
-    #[arg(long, allow_hyphen_values = true)]
-    step_fraction: Option<f64>,
-    /// Triple-junction force of eq. (7): `edge-local` (the default: each
-    /// sample bracketed by its own edge's phases) or `paper` (literal: the
-    /// junction's phases bracket every sample; grows wedges on blurred edges).
-    #[arg(long, value_enum)]
-    junction_force: Option<JunctionArg>,
-    /// Weight of the length term of the Mumford–Shah energy, as a multiple of the smallest gap between phase means.
-    #[arg(long, allow_hyphen_values = true)]
-    length_weight: Option<f64>,
+    #[command(flatten)]
+    evolution: EvolutionArgs,
     /// Built-in phantom to segment when no IMAGE is given.
     #[arg(long, default_value = "four_phase")]
     phantom: String,
@@ -234,21 +284,12 @@ struct PhantomArgs {
 }
 
 fn parse_disk(s: &str) -> Result<InitDisk, Error> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| Error::Usage(format!("--disk {s:?}: expected X,Y,R[,PHASE]")))?;
-    if !(3..=4).contains(&v.len()) || (v.len() == 4 && (v[3] < 0.0 || v[3].fract() != 0.0)) {
-        return Err(Error::Usage(format!(
-            "--disk {s:?}: expected X,Y,R[,PHASE]"
-        )));
-    }
+    let (v, phase) = parse_shape(s, "--disk", 3, "X,Y,R[,PHASE]")?;
     Ok(InitDisk {
         x: v[0],
         y: v[1],
         r: v[2],
-        phase: v.get(3).map_or(1, |&p| p as u32),
+        phase,
     })
 }
 
@@ -269,37 +310,9 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
             )
         }
     };
-    let phases = match a.phases {
-        None => default_phases,
-        Some(n) if (2..=64).contains(&n) => n as usize,
-        Some(n) => {
-            return Err(Error::Usage(format!(
-                "--phases {n}: the number of phases must be between 2 and 64"
-            )))
-        }
-    };
-    let mut params = SegmentParams::new(phases);
+    let mut params = SegmentParams::new(phase_count(a.phases, default_phases)?);
     params.edge_length = a.edge_length;
-    params.max_iterations = a.max_iterations;
-    params.label_flips = !a.no_label_flips;
-    if let Some(b) = a.rigidity {
-        params.rigidity = b;
-    }
-    if let Some(c) = a.step_fraction {
-        params.step_fraction = c;
-    }
-    if let Some(j) = a.junction_force {
-        params.junction_force = match j {
-            JunctionArg::Paper => JunctionForce::Paper,
-            JunctionArg::EdgeLocal => JunctionForce::EdgeLocal,
-        };
-    }
-    if let Some(w) = a.length_weight {
-        params.length_weight = w;
-    }
-    if let Some(e) = a.elasticity {
-        params.elasticity = e;
-    }
+    a.evolution.apply(&mut params);
     params.init = match a.init {
         InitKind::Range => Init::Range,
         InitKind::Disks => {
@@ -337,19 +350,11 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
 }
 
 fn parse_ball(s: &str) -> Result<InitBall, Error> {
-    let bad = || Error::Usage(format!("--ball {s:?}: expected X,Y,Z,R[,PHASE]"));
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad())?;
-    if !(4..=5).contains(&v.len()) || (v.len() == 5 && (v[4] < 0.0 || v[4].fract() != 0.0)) {
-        return Err(bad());
-    }
+    let (v, phase) = parse_shape(s, "--ball", 4, "X,Y,Z,R[,PHASE]")?;
     Ok(InitBall {
         centre: [v[0], v[1], v[2]],
         r: v[3],
-        phase: v.get(4).map_or(1, |&p| p as u32),
+        phase,
     })
 }
 
@@ -363,22 +368,9 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
             seed: a.phantom_seed,
         },
     };
-    if !(2..=64).contains(&a.phases) {
-        return Err(Error::Usage(format!(
-            "--phases {}: the number of phases must be between 2 and 64",
-            a.phases
-        )));
-    }
-    let mut params = SegmentParams::new_3d(a.phases as usize);
+    let mut params = SegmentParams::new_3d(phase_count(Some(a.phases), 2)?);
     params.edge_length = a.edge_length;
-    params.max_iterations = a.max_iterations;
-    params.label_flips = !a.no_label_flips;
-    if let Some(b) = a.rigidity {
-        params.rigidity = b;
-    }
-    if let Some(k) = a.flip_interval {
-        params.flip_interval = k;
-    }
+    a.evolution.apply(&mut params);
     params.init = match a.init {
         Init3Kind::Range => Init::Range,
         Init3Kind::Balls => {
