@@ -117,6 +117,11 @@ pub struct SegmentParams {
     pub flip_interval: usize,
     /// Whether flips must also lower the Mumford–Shah energy (see [`crate::segment::flips`]).
     pub flip_guard: bool,
+    /// Whether a pixel may be relabelled by a cell flip only once per run
+    /// (see [`Flipper::flip`](crate::segment::flips::Flipper::flip)); off in
+    /// 2D, on in 3D (see [`SegmentParams::new_3d`]).
+    #[serde(default)]
+    pub flip_once: bool,
     /// Region force for two-phase interfaces.
     pub force: ForceModel,
     /// External force of triple junctions (see [`JunctionForce`]).
@@ -181,6 +186,7 @@ impl SegmentParams {
             label_flips: true,
             flip_interval: 1,
             flip_guard: true,
+            flip_once: false,
             force: ForceModel::Normalised,
             junction_force: JunctionForce::EdgeLocal,
             rigidity: 5.0,
@@ -213,6 +219,7 @@ impl SegmentParams {
         SegmentParams {
             length_weight: 0.1,
             flip_interval: 20,
+            flip_once: true,
             ..Self::new(phases)
         }
     }

@@ -139,6 +139,7 @@ impl<K: Raster> LabelRule<K> for CellFlips {
             ctx.phases,
             ctx.length_weight,
             ctx.params.flip_guard,
+            ctx.params.flip_once,
         )
     }
 }
