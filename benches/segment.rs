@@ -28,6 +28,18 @@ fn statistics(c: &mut Criterion) {
             (s, s2)
         })
     });
+    // The rasteriser alone, one thread: where integration spends its time.
+    group.bench_function("spans_only", |b| {
+        use dsc_seg::segment::raster::Raster;
+        b.iter(|| {
+            let mut n = 0usize;
+            for c in mesh.cell_ids() {
+                let pts = mesh.cell_points(c);
+                D2::cell_spans(&image, &pts[..3], &mut |a, b| n += b - a);
+            }
+            n
+        })
+    });
     group.bench_function("integrate_cells", |b| {
         b.iter(|| integrate_cells(&mesh, &image, &mut cells))
     });
