@@ -62,17 +62,20 @@ pub struct JobTimes {
     pub write: f64,
 }
 
+/// What every `report.json` holds, 2D or 3D: enough to reproduce the run
+/// (tool, input, every parameter) and to follow it (energy and flips per
+/// iteration, timings per stage). The pipelines add their own fields.
 #[derive(Serialize)]
-struct Report<'a> {
+pub(crate) struct RunReport<'a> {
     tool: &'static str,
     version: &'static str,
     source: &'a Source,
     init_labels: Option<&'a Path>,
-    width: usize,
-    height: usize,
     params: &'a SegmentParams,
     dsc: &'a crate::dsc::DscParams,
+    /// Rank (by increasing mean) of each mesh label: the value written for it.
     phase_order: Vec<u8>,
+    /// The final means by rank, i.e. of output values 0, 1, ...
     ordered_means: Vec<Option<f64>>,
     iterations: usize,
     converged: bool,
@@ -85,6 +88,54 @@ struct Report<'a> {
     times: JobTimes,
     truth_dice: Option<f64>,
     segmentation: &'a SegmentReport,
+}
+
+impl<'a> RunReport<'a> {
+    /// The shared part of the report of a finished run of `seg`.
+    pub(crate) fn new<K: Raster>(
+        tool: &'static str,
+        (source, init_labels): (&'a Source, Option<&'a Path>),
+        seg: &'a Segmentation<'_, K>,
+        report: &'a SegmentReport,
+        times: JobTimes,
+        truth_dice: Option<f64>,
+    ) -> Self {
+        let order = seg.phase_order();
+        let mut ordered_means = vec![None; order.len()];
+        for (l, &rank) in order.iter().enumerate() {
+            ordered_means[rank as usize] = report.final_means.get(l).copied().flatten();
+        }
+        RunReport {
+            tool,
+            version: env!("CARGO_PKG_VERSION"),
+            source,
+            init_labels,
+            params: seg.params(),
+            dsc: seg.dsc_params(),
+            phase_order: order,
+            ordered_means,
+            iterations: report.iterations,
+            converged: report.converged,
+            final_means: &report.final_means,
+            final_energy: report.final_energy,
+            energy: report.history.iter().map(|r| r.energy).collect(),
+            flips: report.history.iter().map(|r| r.flips).collect(),
+            vertices: report.vertices,
+            cells: report.cells,
+            times,
+            truth_dice,
+            segmentation: report,
+        }
+    }
+}
+
+/// The 2D report: the shared fields and the image size.
+#[derive(Serialize)]
+struct Report<'a> {
+    #[serde(flatten)]
+    run: RunReport<'a>,
+    width: usize,
+    height: usize,
 }
 
 /// The final mesh as the overlay and VTK writers want it: 2D points,
@@ -294,7 +345,6 @@ pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
 
     let t_write = Instant::now();
     let labels = seg.label_image();
-    let order = seg.phase_order();
     let (points2, tris, phase) = overlay_arrays(&seg);
     let phase_i32: Vec<i32> = phase.iter().map(|&p| p as i32).collect();
     let dir = stage.path();
@@ -311,37 +361,22 @@ pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
     let truth_dice = truth
         .as_ref()
         .map(|ph| mean_dice(&labels, &ph.truth, ph.phases));
-    let mut ordered_means = vec![None; params.phases];
-    for (l, &rank) in order.iter().enumerate() {
-        ordered_means[rank as usize] = report.final_means[l];
-    }
     let times = JobTimes {
         load,
         segment,
         write: t_write.elapsed().as_secs_f64(),
     };
     let rep = Report {
-        tool: "dsc-seg",
-        version: env!("CARGO_PKG_VERSION"),
-        source: &job.source,
-        init_labels: job.init_labels.as_deref(),
+        run: RunReport::new(
+            "dsc-seg",
+            (&job.source, job.init_labels.as_deref()),
+            &seg,
+            &report,
+            times,
+            truth_dice,
+        ),
         width: w,
         height: h,
-        params: &params,
-        dsc: seg.dsc_params(),
-        phase_order: order.clone(),
-        ordered_means,
-        iterations: report.iterations,
-        converged: report.converged,
-        final_means: &report.final_means,
-        final_energy: report.final_energy,
-        energy: report.history.iter().map(|r| r.energy).collect(),
-        flips: report.history.iter().map(|r| r.flips).collect(),
-        vertices: report.vertices,
-        cells: report.cells,
-        times,
-        truth_dice,
-        segmentation: &report,
     };
     let json = serde_json::to_vec_pretty(&rep).map_err(|e| Error::Usage(e.to_string()))?;
     write_bytes_atomic(dir.join("report.json"), &json)?;

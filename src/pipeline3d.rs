@@ -9,7 +9,9 @@ use crate::error::{Error, Result};
 use crate::io::{save_labels_tiff, write_bytes_atomic, Volume};
 use crate::phantom::noise::to_u8;
 use crate::phantom::Phantom3Kind;
-use crate::pipeline::{check_phantom, mean_dice, publish, run_with_progress, staging, Source};
+use crate::pipeline::{
+    check_phantom, mean_dice, publish, run_with_progress, staging, JobTimes, RunReport, Source,
+};
 use crate::segment::{ImageView, Init, SegmentParams, SegmentReport, Segmentation};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -52,32 +54,16 @@ pub struct QualitySummary {
     pub below_0_3: f64,
 }
 
+/// The 3D report: the shared fields, the volume size, the initial surface
+/// and the final mesh's junction curves and tet quality.
 #[derive(Serialize)]
 struct Report<'a> {
-    tool: &'static str,
-    version: &'static str,
-    source: &'a Source,
-    init_labels: Option<&'a Path>,
-    init_surface: Option<&'a Path>,
+    #[serde(flatten)]
+    run: RunReport<'a>,
     dims: [usize; 3],
-    params: &'a SegmentParams,
-    dsc: &'a crate::dsc::DscParams,
-    phase_order: Vec<u8>,
-    iterations: usize,
-    converged: bool,
-    final_means: &'a [Option<f64>],
-    final_energy: f64,
-    energy: Vec<f64>,
-    flips: Vec<usize>,
-    vertices: usize,
-    cells: usize,
+    init_surface: Option<&'a Path>,
     junction_edges: usize,
     quality: QualitySummary,
-    load_seconds: f64,
-    segment_seconds: f64,
-    write_seconds: f64,
-    truth_dice: Option<f64>,
-    segmentation: &'a SegmentReport,
 }
 
 fn quality(c: &crate::complex::Complex3) -> QualitySummary {
@@ -181,31 +167,24 @@ pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
     complex.write_mesh_vtu(dir.join("mesh.vtu"), &order)?;
     complex.write_interface_vtp(dir.join("interface.vtp"), &order)?;
     let truth_dice = truth.map(|t| mean_dice(&labels, &t, params.phases));
+    let times = JobTimes {
+        load: load_seconds,
+        segment: segment_seconds,
+        write: t_write.elapsed().as_secs_f64(),
+    };
     let rep = Report {
-        tool: "dsc-seg segment3d",
-        version: env!("CARGO_PKG_VERSION"),
-        source: &job.source,
-        init_labels: job.init_labels.as_deref(),
-        init_surface: job.init_surface.as_deref(),
+        run: RunReport::new(
+            "dsc-seg segment3d",
+            (&job.source, job.init_labels.as_deref()),
+            &seg,
+            &report,
+            times,
+            truth_dice,
+        ),
         dims,
-        params: seg.params(),
-        dsc: seg.dsc_params(),
-        phase_order: order.clone(),
-        iterations: report.iterations,
-        converged: report.converged,
-        final_means: &report.final_means,
-        final_energy: report.final_energy,
-        energy: report.history.iter().map(|r| r.energy).collect(),
-        flips: report.history.iter().map(|r| r.flips).collect(),
-        vertices: report.vertices,
-        cells: report.cells,
+        init_surface: job.init_surface.as_deref(),
         junction_edges: complex.junction_edges().len(),
         quality: quality(complex),
-        load_seconds,
-        segment_seconds,
-        write_seconds: t_write.elapsed().as_secs_f64(),
-        truth_dice,
-        segmentation: &report,
     };
     let json = serde_json::to_vec_pretty(&rep).map_err(|e| Error::Usage(e.to_string()))?;
     write_bytes_atomic(dir.join("report.json"), &json)?;
