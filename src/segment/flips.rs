@@ -56,9 +56,9 @@ impl Flipper {
     /// keeps its label, and its boundary is left to the interface motion. Under
     /// strong noise the cells along an interface hold one or two pixels each,
     /// whose means fall on the wrong side often enough that every flip round
-    /// relabels some of them, mostly away from the object; the rigidity then
-    /// smooths the bump back and the next round flips it again, so the run
-    /// never settles (3D, σ = 0.2). Remembering the pixels, which outlive the
+    /// relabels some of them, mostly away from the true boundary; the
+    /// rigidity then smooths the bump back and the next round flips it again,
+    /// so the run never settles (3D, σ = 0.2). Remembering the pixels, which outlive the
     /// remeshed cells, breaks that cycle; cells over pixels no flip has touched
     /// (new regions, specks) flip as before.
     #[allow(clippy::too_many_arguments)]
