@@ -223,11 +223,12 @@ impl SegmentParams {
     /// convergence: σ = 0.2 two balls 179 iterations (Dice 0.9833 → 0.9838), torus
     /// 178 (0.9812 → 0.9814), hollow sphere 294 (0.9781 → 0.9788); σ = 0.1 76, 57,
     /// 78 iterations, Dice 0.9924, 0.9888, 0.9836 (within ±0.0003 of before).
-    /// At 128³ all six stop by the rule as well (Dice 0.9907–0.9966), but at
-    /// σ = 0.2 the rounds never reach zero flips (15–30 per round for long
-    /// stretches), and a run stops only once one round's bumps happen to relax
-    /// within the window: torus after 420 iterations, hollow sphere 320, two
-    /// balls on its 500th. Full table: `benches/RESULTS.md`.
+    /// Measured before the bending sub-steps: at 128³ all six stopped by the
+    /// rule as well (Dice 0.9907–0.9966), but at σ = 0.2 only late (torus 420
+    /// iterations, hollow sphere 320, two balls on its 500th). With the
+    /// sub-steps the bumps a flip round leaves relax faster: 128³ σ = 0.2 stops
+    /// after 77, 240 and 260 iterations (Dice 0.9926, 0.9908, 0.9911), 64³
+    /// σ = 0.2 after 36, 120 and 179. Full table: `benches/RESULTS.md`.
     pub fn new_3d(phases: usize) -> Self {
         SegmentParams {
             length_weight: 0.1,
