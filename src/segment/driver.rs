@@ -15,6 +15,9 @@ use std::time::Instant;
 
 /// Largest stable coefficient of the explicit bending step (see [`Segmentation::step`]).
 pub const MAX_BENDING_STEP: f64 = 0.2;
+/// Most sub-steps a smoothing term takes in one iteration (the default β
+/// needs at most 5).
+pub const MAX_SUBSTEPS: f64 = 64.0;
 /// Largest stable coefficient of the explicit stretching (umbrella) step.
 pub const MAX_STRETCHING_STEP: f64 = 0.5;
 
@@ -466,32 +469,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.displacement.clear();
         self.displacement
             .extend(self.external.iter().map(|&f| f * scale));
-        for (b, term) in self.models.forces.iter_mut().enumerate() {
-            let TermKind::Smoothing { weight, max_step } = kinds[b] else {
-                continue;
-            };
-            let k = scale * weight / l;
-            let substeps = (k / max_step).ceil().max(1.0);
-            let buf = &self.buffers[b];
-            if substeps == 1.0
-                || !term.apply_to(&mut self.forces, &self.displacement, &mut self.applied)
-            {
-                let k = k.min(max_step);
-                for (d, f) in self.displacement.iter_mut().zip(buf) {
-                    *d += *f * k;
-                }
-                continue;
-            }
-            let k = k / substeps;
-            for sub in 0..substeps as usize {
-                if sub > 0 {
-                    term.apply_to(&mut self.forces, &self.displacement, &mut self.applied);
-                }
-                for ((d, f), a) in self.displacement.iter_mut().zip(buf).zip(&self.applied) {
-                    *d += (*f + *a) * k;
-                }
-            }
-        }
+        self.add_smoothing(&kinds, scale, l);
         self.dest.clear();
         let mut max_disp: f64 = 0.0;
         for (i, &d) in self.displacement.iter().enumerate() {
@@ -546,6 +524,40 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
         self.history.push(rec.clone());
         rec
+    }
+
+    /// Adds the smoothing terms to the displacement: term `b` with
+    /// coefficient `k = scale · weight / l` (the external scale, L), as ⌈k/max_step⌉ stable
+    /// sub-steps of its operator when it is linear ([`ForceTerm::apply_to`]),
+    /// else capped at `max_step`. At most [`MAX_SUBSTEPS`] sub-steps: a
+    /// larger coefficient is capped there, so an absurd β cannot stall a run.
+    fn add_smoothing(&mut self, kinds: &[TermKind], scale: f64, l: f64) {
+        for (b, term) in self.models.forces.iter_mut().enumerate() {
+            let TermKind::Smoothing { weight, max_step } = kinds[b] else {
+                continue;
+            };
+            let k = (scale * weight / l).min(max_step * MAX_SUBSTEPS);
+            let substeps = (k / max_step).ceil().max(1.0);
+            let buf = &self.buffers[b];
+            if substeps == 1.0
+                || !term.apply_to(&mut self.forces, &self.displacement, &mut self.applied)
+            {
+                let k = k.min(max_step);
+                for (d, f) in self.displacement.iter_mut().zip(buf) {
+                    *d += *f * k;
+                }
+                continue;
+            }
+            let k = k / substeps;
+            for sub in 0..substeps as usize {
+                if sub > 0 {
+                    term.apply_to(&mut self.forces, &self.displacement, &mut self.applied);
+                }
+                for ((d, f), a) in self.displacement.iter_mut().zip(buf).zip(&self.applied) {
+                    *d += (*f + *a) * k;
+                }
+            }
+        }
     }
 
     /// Whether the stopping rule is met.

@@ -355,3 +355,16 @@ fn integration_counts_every_pixel_once() {
         assert!((sum - want).abs() < 1e-6 * want.max(1.0));
     }
 }
+
+/// A huge rigidity takes at most `MAX_SUBSTEPS` bending sub-steps per
+/// iteration (it once meant ~10⁹ of them): the run ends, valid and finite.
+#[test]
+fn absurd_rigidity_is_capped_not_stalled() {
+    let ph = Phantom2Kind::TwoPhase.generate(64, 0.1, 3);
+    let mut p = SegmentParams::new(2);
+    p.rigidity = 1e9;
+    p.max_iterations = 20;
+    let r = run(&ph, p);
+    assert!(r.report.history.iter().all(|h| h.energy.is_finite()));
+    assert!(r.dice > 0.5, "dice {}", r.dice);
+}
