@@ -207,7 +207,7 @@ fn surface_segmentation<'a>(
     let surface = crate::io::surface::read_surface(path)
         .map_err(|e| Error::Usage(format!("--init-surface {}: {e}", path.display())))?;
     params.validate_dims(view.dims)?;
-    let l = params.resolved_edge_length(view.dims[0], view.dims[1]);
+    let l = params.resolved_edge_length(view.dims);
     let complex = complex_from_surface(&surface, view.dims, l)
         .map_err(|e| Error::Usage(format!("--init-surface {}: {e}", path.display())))?;
     Ok(Segmentation::from_complex(view, params, complex)?)

@@ -60,7 +60,7 @@ struct Segment3dArgs {
     /// Number of phases N, 2..=64.
     #[arg(long, allow_hyphen_values = true, default_value_t = 2)]
     phases: i64,
-    /// Average edge length L of the mesh in voxels [default: min side/64 clamped to 3..8].
+    /// Average edge length L of the mesh in voxels [default: smallest side/64·sqrt(N-1) clamped to 3..10].
     #[arg(long, allow_hyphen_values = true)]
     edge_length: Option<f64>,
     /// Initialisation.

@@ -182,7 +182,6 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         if image.is_empty() {
             return Err(SegmentError::EmptyImage);
         }
-        let (w, h) = (image.width(), image.height());
         let dims = &image.dims[..K::N];
         if dims.iter().any(|&d| d < 2) {
             let size: Vec<String> = dims.iter().map(|d| d.to_string()).collect();
@@ -208,7 +207,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 phases: params.phases,
             });
         }
-        let l = params.resolved_edge_length(w, h);
+        let l = params.resolved_edge_length(image.dims);
         let dsc = DscParams::new::<K>(l);
         let given = preset.is_some();
         let mut complex = match preset {

@@ -397,10 +397,13 @@ impl SegmentParams {
         Ok(())
     }
 
-    /// The edge length to use for a `width × height` image.
-    pub fn resolved_edge_length(&self, width: usize, height: usize) -> f64 {
+    /// The edge length to use for an image or volume of `dims` samples.
+    pub fn resolved_edge_length(&self, dims: [usize; 3]) -> f64 {
+        // The smallest extent counts (a 2D image has depth 1, which does not):
+        // a thin stack of slices must not get cells thicker than itself.
+        let side = dims.iter().copied().filter(|&d| d > 1).min().unwrap_or(1);
         self.edge_length
-            .unwrap_or_else(|| default_edge_length(width, height, self.phases))
+            .unwrap_or_else(|| default_edge_length(side, side, self.phases))
     }
 }
 
@@ -428,4 +431,23 @@ pub fn default_edge_length(width: usize, height: usize, phases: usize) -> f64 {
         .clamp(3.0, 10.0)
         .min(m / 4.0)
         .max(1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_edge_length_follows_the_smallest_extent() {
+        let p = SegmentParams::new_3d(2);
+        assert_eq!(p.resolved_edge_length([512, 512, 1]), 8.0);
+        assert_eq!(p.resolved_edge_length([512, 512, 512]), 8.0);
+        // a thin stack: 20 slices, not the 512-pixel slices, set L
+        assert_eq!(p.resolved_edge_length([512, 512, 20]), 3.0);
+        let given = SegmentParams {
+            edge_length: Some(5.5),
+            ..p
+        };
+        assert_eq!(given.resolved_edge_length([512, 512, 20]), 5.5);
+    }
 }
