@@ -82,25 +82,30 @@ fn two_phase_phantom_defaults() {
     assert_energy_decreases(&r.report);
 }
 
-#[test]
-fn four_phase_phantom_defaults_find_triple_junctions() {
-    let ph = Phantom2Kind::FourPhase.generate(128, 0.1, 3);
-    let r = run(&ph, SegmentParams::new(4));
-    assert!(r.dice > 0.93, "dice {}", r.dice);
+/// A four-phase run that converged, lowered its energy, kept the harness
+/// phantom's triple junctions (Y disk: 4, square+disk: 2, stripes: 4; at
+/// least 6 must survive as eq. (7) junctions) and reached `min_dice`.
+fn assert_four_phase_run(r: &Run, min_dice: f64) {
+    assert!(r.dice > min_dice, "dice {}", r.dice);
     assert!(
         r.report.converged,
         "stopped after {} iterations",
         r.report.iterations
     );
     assert_energy_decreases(&r.report);
-    // the harness phantom has ≥ 6 triple junctions (Y disk: 4, square+disk: 2,
-    // stripes: 4); the final mesh must carry eq. (7) junctions
     let last = r.report.history.last().unwrap();
     assert!(
         last.junctions.0 >= 6,
         "triple junctions {:?}",
         last.junctions
     );
+}
+
+#[test]
+fn four_phase_phantom_defaults_find_triple_junctions() {
+    let ph = Phantom2Kind::FourPhase.generate(128, 0.1, 3);
+    let r = run(&ph, SegmentParams::new(4));
+    assert_four_phase_run(&r, 0.93);
     // every phase is present and the means are ordered like the levels
     let m: Vec<f64> = {
         let mut v: Vec<f64> = r.report.final_means.iter().map(|m| m.unwrap()).collect();
@@ -113,28 +118,30 @@ fn four_phase_phantom_defaults_find_triple_junctions() {
 }
 
 #[test]
-fn edge_local_junction_force_finds_triple_junctions() {
-    // the per-edge reading of eq. (7) keeps the junctions and is at least as
-    // accurate as the paper's on the harness phantom (no middle-phase wedges)
+fn literal_paper_junction_force_finds_triple_junctions() {
+    // eq. (7) read literally (the junction's phases bracket every sample)
+    // also keeps the junctions. The default per-sample reading stays within
+    // 0.005 Dice of it on this small phantom (0.958 against 0.962 measured);
+    // on the 256² harness phantoms it is clearly better (benches/RESULTS.md)
     let ph = Phantom2Kind::FourPhase.generate(128, 0.1, 3);
-    let paper = run(&ph, SegmentParams::new(4));
-    let mut p = SegmentParams::new(4);
-    p.junction_force = JunctionForce::EdgeLocal;
-    let r = run(&ph, p);
-    eprintln!("edge-local dice {} paper {}", r.dice, paper.dice);
-    assert!(r.dice > 0.93, "dice {}", r.dice);
-    assert!(r.dice > paper.dice - 0.005, "{} vs {}", r.dice, paper.dice);
-    assert!(
-        r.report.converged,
-        "stopped after {} iterations",
-        r.report.iterations
+    let default = run(&ph, SegmentParams::new(4));
+    assert_eq!(
+        SegmentParams::new(4).junction_force,
+        JunctionForce::EdgeLocal
     );
-    assert_energy_decreases(&r.report);
-    let last = r.report.history.last().unwrap();
+    let mut p = SegmentParams::new(4);
+    p.junction_force = JunctionForce::Paper;
+    let paper = run(&ph, p);
+    eprintln!(
+        "default dice {} literal eq. (7) {}",
+        default.dice, paper.dice
+    );
+    assert_four_phase_run(&paper, 0.9);
     assert!(
-        last.junctions.0 >= 6,
-        "triple junctions {:?}",
-        last.junctions
+        default.dice > paper.dice - 0.005,
+        "{} vs {}",
+        default.dice,
+        paper.dice
     );
 }
 
