@@ -384,7 +384,6 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     pub fn step(&mut self) -> IterationRecord {
         let iteration = self.history.len() + 1;
         self.integrate();
-        let mut data_energy = self.data_energy();
 
         let mut flips = 0;
         if self.params.label_flips && (iteration - 1) % self.params.flip_interval.max(1) == 0 {
@@ -403,12 +402,12 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             }
             if flips > 0 {
                 self.phases.update(&self.complex, &self.cells);
-                // The record is of one state: the labels after the flips,
-                // whose length term the forces measure below.
-                data_energy = self.data_energy();
             }
             self.times.flips += t.elapsed().as_secs_f64();
         }
+        // The record is of one state: the labels after the flips, whose
+        // length term the forces measure below.
+        let data_energy = self.data_energy();
 
         let t = Instant::now();
         let l = self.dsc.edge_length;

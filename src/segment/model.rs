@@ -104,7 +104,7 @@ impl<K: Raster> ForceContext<'_, '_, K> {
     /// facet's corners with the hat weights, and each vertex's total is divided
     /// by its hat-weighted share of the interface measure. The result, a
     /// force per unit length (area), is added into `out`. `scratch` is reused
-    /// between calls.
+    /// between calls, so a term that keeps it allocates nothing per iteration.
     ///
     /// For example `f = (2·I(p) − m_a − m_b)/(m_a − m_b)` is eq. (6) on
     /// two-phase interfaces, and `f = ±p` for `a` or `b` the inflated phase a
@@ -112,15 +112,14 @@ impl<K: Raster> ForceContext<'_, '_, K> {
     pub fn add_facet_integrated(
         &self,
         mut f: impl FnMut(K::Point, Label, Label) -> f64,
-        scratch: &mut Vec<f64>,
+        scratch: &mut Vec<(K::Point, f64)>,
         out: &mut [K::Point],
     ) {
-        let cx = self.complex;
+        // per vertex: the integrated force and its hat-weighted share
         scratch.clear();
-        scratch.resize(cx.vertex_capacity(), 0.0);
-        let mut sum = vec![K::Point::zero(); out.len()];
+        scratch.resize(out.len(), (K::Point::zero(), 0.0));
         let n = K::N;
-        for facet in cx.interface_facets() {
+        for facet in self.complex.interface_facets() {
             let (a, b, normal, corners) = (facet.a, facet.b, facet.normal, facet.corners);
             K::facet_samples(
                 &facet.points[..n],
@@ -129,15 +128,16 @@ impl<K: Raster> ForceContext<'_, '_, K> {
                     let v = f(p, a, b);
                     for k in 0..n {
                         let wk = w[k] * ds;
-                        sum[corners[k].index()] += normal * (v * wk);
-                        scratch[corners[k].index()] += wk;
+                        let acc = &mut scratch[corners[k].index()];
+                        acc.0 += normal * (v * wk);
+                        acc.1 += wk;
                     }
                 },
             );
         }
-        for (i, o) in out.iter_mut().enumerate() {
-            if scratch[i] > 0.0 {
-                let add = sum[i] * (1.0 / scratch[i]);
+        for (o, &(sum, share)) in out.iter_mut().zip(scratch.iter()) {
+            if share > 0.0 {
+                let add = sum * (1.0 / share);
                 if add.is_finite() {
                     *o += add;
                 }
