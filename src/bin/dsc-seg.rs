@@ -283,6 +283,29 @@ struct PhantomArgs {
     out: PathBuf,
 }
 
+/// Every `--disk`/`--ball` value parsed; `init` needs at least one.
+fn parse_all<T>(
+    specs: &[String],
+    init: &str,
+    option: &str,
+    parse: impl Fn(&str) -> Result<T, Error>,
+) -> Result<Vec<T>, Error> {
+    if specs.is_empty() {
+        return Err(Error::Usage(format!("{init} needs at least one {option}")));
+    }
+    specs.iter().map(|s| parse(s)).collect()
+}
+
+/// `--init labels`: the labels are loaded by the pipeline from `--init-labels`.
+fn labels_init(given: bool, what: &str) -> Result<Init, Error> {
+    if !given {
+        return Err(Error::Usage(format!(
+            "--init labels needs --init-labels {what}"
+        )));
+    }
+    Ok(Init::Labels { labels: Vec::new() })
+}
+
 fn parse_disk(s: &str) -> Result<InitDisk, Error> {
     let (v, phase) = parse_shape(s, "--disk", 3, "X,Y,R[,PHASE]")?;
     Ok(InitDisk {
@@ -315,25 +338,13 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
     a.evolution.apply(&mut params);
     params.init = match a.init {
         InitKind::Range => Init::Range,
-        InitKind::Disks => {
-            if a.disks.is_empty() {
-                return Err(Error::Usage(
-                    "--init disks needs at least one --disk X,Y,R".into(),
-                ));
-            }
-            Init::Disks(
-                a.disks
-                    .iter()
-                    .map(|s| parse_disk(s))
-                    .collect::<Result<_, _>>()?,
-            )
-        }
-        InitKind::Labels => {
-            if a.init_labels.is_none() {
-                return Err(Error::Usage("--init labels needs --init-labels PNG".into()));
-            }
-            Init::Labels { labels: Vec::new() }
-        }
+        InitKind::Disks => Init::Disks(parse_all(
+            &a.disks,
+            "--init disks",
+            "--disk X,Y,R",
+            parse_disk,
+        )?),
+        InitKind::Labels => labels_init(a.init_labels.is_some(), "PNG")?,
     };
     let job = SegmentJob {
         source,
@@ -373,27 +384,13 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
     a.evolution.apply(&mut params);
     params.init = match a.init {
         Init3Kind::Range => Init::Range,
-        Init3Kind::Balls => {
-            if a.balls.is_empty() {
-                return Err(Error::Usage(
-                    "--init balls needs at least one --ball X,Y,Z,R".into(),
-                ));
-            }
-            Init::Balls(
-                a.balls
-                    .iter()
-                    .map(|s| parse_ball(s))
-                    .collect::<Result<_, _>>()?,
-            )
-        }
-        Init3Kind::Labels => {
-            if a.init_labels.is_none() {
-                return Err(Error::Usage(
-                    "--init labels needs --init-labels VOLUME".into(),
-                ));
-            }
-            Init::Labels { labels: Vec::new() }
-        }
+        Init3Kind::Balls => Init::Balls(parse_all(
+            &a.balls,
+            "--init balls",
+            "--ball X,Y,Z,R",
+            parse_ball,
+        )?),
+        Init3Kind::Labels => labels_init(a.init_labels.is_some(), "VOLUME")?,
     };
     let job = Segment3dJob {
         source,

@@ -70,7 +70,7 @@ impl<P: Point> Acc<P> {
         self.phases[..self.np].iter().position(|&p| p == l)
     }
     fn slot(&mut self, l: Label) -> Option<usize> {
-        if let Some(s) = self.phases[..self.np].iter().position(|&p| p == l) {
+        if let Some(s) = self.slot_of(l) {
             return Some(s);
         }
         if self.np < MAXP {

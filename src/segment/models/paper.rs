@@ -3,6 +3,7 @@
 //!
 //! [`ForceField`]: crate::segment::forces::ForceField
 
+use crate::dim::Point;
 use crate::segment::driver::{MAX_BENDING_STEP, MAX_STRETCHING_STEP};
 use crate::segment::error::SegmentError;
 use crate::segment::flips::Flipper;
@@ -13,6 +14,13 @@ use crate::segment::model::{
 };
 use crate::segment::params::{ForceModel, SegmentParams};
 use crate::segment::raster::Raster;
+
+/// Adds a per-vertex field of the [`ForceField`] into `out`.
+fn add_field<P: Point>(out: &mut [P], field: &[P]) {
+    for (o, f) in out.iter_mut().zip(field) {
+        *o += *f;
+    }
+}
 
 /// The region force of eqs. (5)–(7) (the model chosen by
 /// [`SegmentParams::force`]): on a two-phase interface between phases with
@@ -43,9 +51,7 @@ impl<K: Raster> ForceTerm<K> for RegionForce {
     }
 
     fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
-        for (o, f) in out.iter_mut().zip(&ctx.field.external) {
-            *o += *f;
-        }
+        add_field(out, &ctx.field.external);
     }
 }
 
@@ -67,9 +73,7 @@ impl<K: Raster> ForceTerm<K> for Rigidity {
     }
 
     fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
-        for (o, f) in out.iter_mut().zip(&ctx.field.bending) {
-            *o += *f;
-        }
+        add_field(out, &ctx.field.bending);
     }
 
     fn apply_to(
@@ -101,9 +105,7 @@ impl<K: Raster> ForceTerm<K> for Elasticity {
     }
 
     fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
-        for (o, f) in out.iter_mut().zip(&ctx.field.stretching) {
-            *o += *f;
-        }
+        add_field(out, &ctx.field.stretching);
     }
 
     fn apply_to(
