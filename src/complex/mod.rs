@@ -154,8 +154,17 @@ impl<K: Dim> Complex<K> {
     }
 
     /// Collects the cells incident to `v` into `out` (cleared first), by walking
-    /// across facets that contain `v`.
+    /// across facets that contain `v`: breadth-first from its stored cell.
     pub fn star_into(&self, v: VertexId, out: &mut Vec<CellId>) {
+        if K::N == 2 {
+            self.fan_into(v, out);
+        } else {
+            self.star_by_search(v, out);
+        }
+    }
+
+    /// The breadth-first walk of [`star_into`](Self::star_into).
+    fn star_by_search(&self, v: VertexId, out: &mut Vec<CellId>) {
         out.clear();
         let Some(start) = self.vertex_cell[v.index()] else {
             return;
@@ -177,6 +186,63 @@ impl<K: Dim> Complex<K> {
                 }
             }
         }
+    }
+
+    /// The 2D star is a fan: every cell has two edges through `v`, so the
+    /// breadth-first search is two walks leaving the start cell on either
+    /// side, taking turns. Walking them directly gives the same cells in the
+    /// same order (callers' floating-point sums depend on it) with one
+    /// membership test per cell instead of one per edge: the star is the
+    /// hottest query of 2D mesh improvement.
+    fn fan_into(&self, v: VertexId, out: &mut Vec<CellId>) {
+        out.clear();
+        let Some(start) = self.vertex_cell[v.index()] else {
+            return;
+        };
+        out.push(start);
+        // Each front: the cell to step from and the cell it was reached from.
+        let mut fronts = [None, None];
+        let mut opened = 0;
+        let verts = self.cell(start);
+        for (i, nb) in self.neighbours(start).iter().enumerate() {
+            if let (false, Some(nb)) = (verts[i] == v, *nb) {
+                if !out.contains(&nb) {
+                    out.push(nb);
+                    fronts[opened] = Some((nb, start));
+                    opened += 1;
+                }
+            }
+        }
+        while fronts.iter().any(Option::is_some) {
+            for front in &mut fronts {
+                if let Some((c, from)) = *front {
+                    *front = self.fan_step(v, c, from, out);
+                }
+            }
+        }
+    }
+
+    /// One step of a fan walk: pushes the cell beyond `c` (across its edge
+    /// through `v` that does not lead back to `from`) unless the walk is
+    /// closed or at the border, and returns the new front.
+    #[inline]
+    fn fan_step(
+        &self,
+        v: VertexId,
+        c: CellId,
+        from: CellId,
+        out: &mut Vec<CellId>,
+    ) -> Option<(CellId, CellId)> {
+        let verts = self.cell(c);
+        for (i, nb) in self.neighbours(c).iter().enumerate() {
+            if let (false, Some(nb)) = (verts[i] == v, *nb) {
+                if nb != from && !out.contains(&nb) {
+                    out.push(nb);
+                    return Some((nb, c));
+                }
+            }
+        }
+        None
     }
 
     /// Collects the vertices adjacent to `v` (its link vertices) into `out`.
@@ -337,4 +403,38 @@ impl<K: Dim> Complex<K> {
 #[inline]
 fn holds(ids: &[CellId], x: CellId) -> bool {
     ids.iter().fold(false, |found, &y| found | (y == x))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dsc::{Destinations, DscParams};
+    use nalgebra::Vector2;
+
+    /// The fan walk gives the breadth-first star cell for cell, in order, for
+    /// every vertex (interior, border and corner) of a mesh deformed, flipped,
+    /// collapsed and split by many DSC steps.
+    #[test]
+    fn fan_walk_equals_breadth_first_search() {
+        let l = 4.0;
+        let mut c = Complex::<D2>::rectangle(48.0, 40.0, l).unwrap();
+        c.label_by(|p| u32::from((p - Vector2::new(22.0, 19.0)).norm() < 11.0));
+        let params = DscParams::new::<D2>(l);
+        let (mut fan, mut bfs) = (Vec::new(), Vec::new());
+        for step in 0..60 {
+            let mut dest = Destinations::new(&c);
+            for v in c.vertex_ids().collect::<Vec<_>>() {
+                let p = c.position(v);
+                let t = step as f64 * 0.3;
+                let d = Vector2::new((p.y * 0.21 + t).sin(), (p.x * 0.17 - t).cos());
+                dest.set(v, c.constrain(v, p + d * (0.4 * l)));
+            }
+            c.deform(&dest, &params);
+            for v in c.vertex_ids() {
+                c.fan_into(v, &mut fan);
+                c.star_by_search(v, &mut bfs);
+                assert_eq!(fan, bfs, "step {step}, vertex {v:?}");
+            }
+        }
+    }
 }

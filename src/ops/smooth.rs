@@ -43,7 +43,8 @@ impl<K: Dim> Complex<K> {
         if (target - p).length() <= 1e-12 {
             return false;
         }
-        if !self.star_positive_at(star, v, target) || self.min_quality_at(star, v, target) < before
+        if !self.star_positive_at(star, v, target)
+            || !self.qualities_at_least(star, v, target, before)
         {
             return false;
         }
