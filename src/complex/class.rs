@@ -1,6 +1,6 @@
 //! Vertex classification: interior, interface, junction, and domain boundary.
 
-use super::{Complex, Label, VertexId};
+use super::{CellId, Complex, Label, VertexId};
 use crate::dim::Dim;
 use serde::{Deserialize, Serialize};
 
@@ -77,6 +77,61 @@ impl<K: Dim> Complex<K> {
 
     /// Number of connected same-label pieces of the star of `v` (connected through facets containing `v`).
     pub fn count_phase_pieces(&self, v: VertexId) -> usize {
+        if K::N == 2 {
+            if let Some(pieces) = self.fan_phase_pieces(v) {
+                return pieces;
+            }
+        }
+        self.phase_pieces_by_search(v)
+    }
+
+    /// The 2D star is a fan, so its same-label pieces are the runs between
+    /// label changes along it: counted in one walk around `v`, without the
+    /// search and its buffers (every flip and move reclassifies vertices).
+    /// `None` if the walk does not close or end within a sane number of
+    /// steps (only a broken complex), for the general search to answer.
+    pub(super) fn fan_phase_pieces(&self, v: VertexId) -> Option<usize> {
+        let Some(start) = self.vertex_cell[v.index()] else {
+            return Some(0);
+        };
+        let mut changes = 0;
+        for first in self.fan_sides(start, v, None) {
+            let (mut prev, mut cur) = (start, first);
+            let mut steps = 0;
+            while let Some(c) = cur {
+                changes += usize::from(self.labels[c.index()] != self.labels[prev.index()]);
+                if c == start {
+                    return Some(changes.max(1));
+                }
+                steps += 1;
+                if steps > 1024 {
+                    return None;
+                }
+                let [a, b] = self.fan_sides(c, v, Some(prev));
+                (prev, cur) = (c, a.or(b));
+            }
+        }
+        // Both walks ended at the border: an open fan.
+        Some(changes + 1)
+    }
+
+    /// The neighbours of `c` across its two edges through `v`, leaving out `except`.
+    #[inline]
+    fn fan_sides(&self, c: CellId, v: VertexId, except: Option<CellId>) -> [Option<CellId>; 2] {
+        let verts = self.cells[c.index()].as_ref();
+        let mut out = [None; 2];
+        let mut k = 0;
+        for (i, &nb) in self.neighbours[c.index()].as_ref().iter().enumerate() {
+            if verts[i] != v && k < 2 {
+                out[k] = nb.filter(|&n| Some(n) != except);
+                k += 1;
+            }
+        }
+        out
+    }
+
+    /// [`count_phase_pieces`](Self::count_phase_pieces) by a search over the star.
+    pub(super) fn phase_pieces_by_search(&self, v: VertexId) -> usize {
         let mut star = Vec::new();
         self.star_into(v, &mut star);
         let mut piece = vec![usize::MAX; star.len()];
@@ -122,15 +177,18 @@ impl<K: Dim> Complex<K> {
     }
 
     /// Recomputes the class of every live vertex of the given cells.
-    pub(crate) fn reclassify_cells(&mut self, cells: &[super::CellId]) {
-        for &c in cells {
-            if !self.is_alive(c) {
-                continue;
-            }
-            for i in 0..K::NV {
-                let v = self.cells[c.index()].as_ref()[i];
-                self.classes[v.index()] = self.compute_class(v);
-            }
+    /// Each vertex once, however many of the cells hold it (a class depends
+    /// only on the labels and positions, not on the order of the updates).
+    pub(crate) fn reclassify_cells(&mut self, cells: &[CellId]) {
+        let mut vertices: Vec<VertexId> = cells
+            .iter()
+            .filter(|&&c| self.is_alive(c))
+            .flat_map(|&c| self.cells[c.index()].as_ref().iter().copied())
+            .collect();
+        vertices.sort_unstable();
+        vertices.dedup();
+        for v in vertices {
+            self.classes[v.index()] = self.compute_class(v);
         }
     }
 }

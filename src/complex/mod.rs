@@ -411,14 +411,19 @@ mod tests {
     use crate::dsc::{Destinations, DscParams};
     use nalgebra::Vector2;
 
-    /// The fan walk gives the breadth-first star cell for cell, in order, for
-    /// every vertex (interior, border and corner) of a mesh deformed, flipped,
-    /// collapsed and split by many DSC steps.
+    /// The fan walk gives the breadth-first star cell for cell, in order, and
+    /// the same number of phase pieces as the search, for every vertex
+    /// (interior, border, corner, interface, junction) of a three-phase mesh
+    /// deformed, flipped, collapsed and split by many DSC steps.
     #[test]
     fn fan_walk_equals_breadth_first_search() {
         let l = 4.0;
         let mut c = Complex::<D2>::rectangle(48.0, 40.0, l).unwrap();
-        c.label_by(|p| u32::from((p - Vector2::new(22.0, 19.0)).norm() < 11.0));
+        // Three phases meeting at junctions, and touching the border.
+        c.label_by(|p| {
+            u32::from((p - Vector2::new(22.0, 19.0)).norm() < 11.0)
+                + 2 * u32::from(p.x > 30.0 && p.y < 25.0)
+        });
         let params = DscParams::new::<D2>(l);
         let (mut fan, mut bfs) = (Vec::new(), Vec::new());
         for step in 0..60 {
@@ -434,6 +439,11 @@ mod tests {
                 c.fan_into(v, &mut fan);
                 c.star_by_search(v, &mut bfs);
                 assert_eq!(fan, bfs, "step {step}, vertex {v:?}");
+                assert_eq!(
+                    c.fan_phase_pieces(v),
+                    Some(c.phase_pieces_by_search(v)),
+                    "step {step}, vertex {v:?}"
+                );
             }
         }
     }
