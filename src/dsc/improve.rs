@@ -42,25 +42,41 @@ impl Connectivity for D2 {
 }
 
 /// Flips until nothing changes (at most 8 sweeps) over the cells `region` lists.
+///
+/// Positions and labels do not change during the sweeps, and a flip always
+/// creates cells with new (higher) ids, so an edge between two cells that
+/// both existed when the previous sweep began was tested there, was not
+/// flipped, and would not be now: a later sweep tests only the edges of
+/// cells created since. The flips made, and their order, are those of
+/// testing every edge.
 fn flip_sweeps(
     complex: &mut Complex<D2>,
     mut region: impl FnMut(&Complex<D2>, &mut Vec<CellId>),
 ) -> usize {
     let mut flips = 0;
     let mut cells = Vec::new();
+    // Cells with ids below this were all tested by the previous sweep.
+    let mut tested_below = 0;
     for _sweep in 0..8 {
         let mut changed = 0;
+        let sweep_start = complex.cell_capacity();
         region(complex, &mut cells);
         for &c in &cells {
             for i in 0..3 {
                 if !complex.is_alive(c) {
                     break;
                 }
+                let settled = c.index() < tested_below
+                    && complex.neighbours(c)[i].is_none_or(|nb| nb.index() < tested_below);
+                if settled {
+                    continue;
+                }
                 if let Ok(true) = complex.flip_if_better(c, i) {
                     changed += 1;
                 }
             }
         }
+        tested_below = sweep_start;
         flips += changed;
         if changed == 0 {
             break;
