@@ -8,40 +8,90 @@ use serde::Serialize;
 
 /// The dimension-specific connectivity improvement (2D edge flips, 3D flips).
 pub trait Connectivity: Dim {
-    /// One improvement pass over the whole complex; returns the number of changes.
-    fn improve_connectivity(complex: &mut Complex<Self>, params: &DscParams) -> usize;
-    /// Improvement restricted to the cells around `seeds` (by default: everywhere).
-    fn improve_connectivity_near(
+    /// Improves the connectivity of the cells of `region` (flips, at most a
+    /// few sweeps); returns the number of changes. Leaves `region` current
+    /// if it still is.
+    fn improve_connectivity_in(
         complex: &mut Complex<Self>,
-        seeds: &[VertexId],
+        region: &mut Region,
         params: &DscParams,
-    ) -> usize {
-        let _ = seeds;
-        Self::improve_connectivity(complex, params)
+    ) -> usize;
+
+    /// One improvement pass over the whole complex; returns the number of changes.
+    fn improve_connectivity(complex: &mut Complex<Self>, params: &DscParams) -> usize {
+        Self::improve_connectivity_in(complex, &mut Region::everything(), params)
+    }
+}
+
+/// The cells an improvement works on: those around some seed vertices
+/// ([`Complex::region_cells`]), or every cell. They are kept while they are
+/// known to be current: smoothing moves vertices but keeps every cell and
+/// star, and a flip sweep or a degenerate-cell removal that changed nothing
+/// keeps them too, so the region is not walked again after each of them.
+#[derive(Debug)]
+pub struct Region<'s> {
+    /// `None`: every live cell, in id order.
+    seeds: Option<&'s [VertexId]>,
+    cells: Vec<CellId>,
+    marks: Vec<bool>,
+    current: bool,
+}
+
+impl<'s> Region<'s> {
+    /// The cells around `seeds`.
+    pub fn around(seeds: &'s [VertexId]) -> Self {
+        Region {
+            seeds: Some(seeds),
+            cells: Vec::new(),
+            marks: Vec::new(),
+            current: false,
+        }
+    }
+
+    /// Every cell.
+    pub fn everything() -> Self {
+        Region {
+            seeds: None,
+            cells: Vec::new(),
+            marks: Vec::new(),
+            current: false,
+        }
+    }
+
+    /// The cells, collected again unless they are current.
+    pub fn cells<K: Connectivity>(&mut self, complex: &Complex<K>) -> &[CellId] {
+        if !self.current {
+            match self.seeds {
+                Some(seeds) => complex.region_cells(seeds, &mut self.cells, &mut self.marks),
+                None => {
+                    self.cells.clear();
+                    self.cells.extend(complex.cell_ids());
+                }
+            }
+            self.current = true;
+        }
+        &self.cells
+    }
+
+    /// Marks the cells stale: the connectivity changed.
+    pub fn invalidate(&mut self) {
+        self.current = false;
     }
 }
 
 impl Connectivity for D2 {
     /// Flips non-interface edges until the triangulation is locally Delaunay
     /// within each phase (bounded number of sweeps).
-    fn improve_connectivity(complex: &mut Complex<D2>, _params: &DscParams) -> usize {
-        flip_sweeps(complex, |c, out| {
-            out.clear();
-            out.extend(c.cell_ids());
-        })
-    }
-
-    fn improve_connectivity_near(
+    fn improve_connectivity_in(
         complex: &mut Complex<D2>,
-        seeds: &[VertexId],
+        region: &mut Region,
         _params: &DscParams,
     ) -> usize {
-        let mut marks = Vec::new();
-        flip_sweeps(complex, |c, out| c.region_cells(seeds, out, &mut marks))
+        flip_sweeps(complex, region)
     }
 }
 
-/// Flips until nothing changes (at most 8 sweeps) over the cells `region` lists.
+/// Flips until nothing changes (at most 8 sweeps) over the region's cells.
 ///
 /// Positions and labels do not change during the sweeps, and a flip always
 /// creates cells with new (higher) ids, so an edge between two cells that
@@ -49,19 +99,14 @@ impl Connectivity for D2 {
 /// flipped, and would not be now: a later sweep tests only the edges of
 /// cells created since. The flips made, and their order, are those of
 /// testing every edge.
-fn flip_sweeps(
-    complex: &mut Complex<D2>,
-    mut region: impl FnMut(&Complex<D2>, &mut Vec<CellId>),
-) -> usize {
+fn flip_sweeps(complex: &mut Complex<D2>, region: &mut Region) -> usize {
     let mut flips = 0;
-    let mut cells = Vec::new();
     // Cells with ids below this were all tested by the previous sweep.
     let mut tested_below = 0;
     for _sweep in 0..8 {
         let mut changed = 0;
         let sweep_start = complex.cell_capacity();
-        region(complex, &mut cells);
-        for &c in &cells {
+        for &c in region.cells(complex) {
             for i in 0..3 {
                 if !complex.is_alive(c) {
                     break;
@@ -81,59 +126,40 @@ fn flip_sweeps(
         if changed == 0 {
             break;
         }
+        region.invalidate();
     }
     flips
 }
 
 impl Connectivity for D3 {
-    /// Visits every tet below `low_quality` and tries edge removal (3-2, 4-4 and
-    /// larger rings) on its edges, then 2-3 flips on its facets, off the
-    /// interface, accepting a flip only when the smallest quality of the tets
-    /// involved increases (at most 4 sweeps).
-    fn improve_connectivity(complex: &mut Complex<D3>, params: &DscParams) -> usize {
-        tet_flip_sweeps(complex, params, |c, out| {
-            out.clear();
-            out.extend(c.cell_ids());
-        })
-    }
-
-    fn improve_connectivity_near(
+    /// Visits every tet of the region below `low_quality` and tries edge
+    /// removal (3-2, 4-4 and larger rings) on its edges, then 2-3 flips on
+    /// its facets, off the interface, accepting a flip only when the smallest
+    /// quality of the tets involved increases (at most 4 sweeps).
+    fn improve_connectivity_in(
         complex: &mut Complex<D3>,
-        seeds: &[VertexId],
+        region: &mut Region,
         params: &DscParams,
     ) -> usize {
-        let mut marks = Vec::new();
-        tet_flip_sweeps(complex, params, |c, out| {
-            c.region_cells(seeds, out, &mut marks)
-        })
-    }
-}
-
-/// Flips low-quality tets among those `region` lists until nothing changes (at most 4 sweeps).
-fn tet_flip_sweeps(
-    complex: &mut Complex<D3>,
-    params: &DscParams,
-    mut region: impl FnMut(&Complex<D3>, &mut Vec<CellId>),
-) -> usize {
-    let mut flips = 0;
-    let mut cells = Vec::new();
-    for _sweep in 0..4 {
-        let mut changed = 0;
-        region(complex, &mut cells);
-        for &c in &cells {
-            if !complex.is_alive(c) || complex.quality(c) >= params.low_quality {
-                continue;
+        let mut flips = 0;
+        for _sweep in 0..4 {
+            let mut changed = 0;
+            for &c in region.cells(complex) {
+                if !complex.is_alive(c) || complex.quality(c) >= params.low_quality {
+                    continue;
+                }
+                if complex.improve_tet(c, 0.0).is_some() {
+                    changed += 1;
+                }
             }
-            if complex.improve_tet(c, 0.0).is_some() {
-                changed += 1;
+            flips += changed;
+            if changed == 0 {
+                break;
             }
+            region.invalidate();
         }
-        flips += changed;
-        if changed == 0 {
-            break;
-        }
+        flips
     }
-    flips
 }
 
 /// Counts of what one improvement did.
@@ -163,20 +189,28 @@ impl<K: Connectivity> Complex<K> {
     /// interface, not the mesh.
     pub fn improve_near(&mut self, seeds: &[VertexId], params: &DscParams) -> ImproveStats {
         let mut stats = ImproveStats::default();
+        let mut region = Region::around(seeds);
         let mut cells = Vec::new();
         let mut marks = Vec::new();
         let mut vertices = Vec::new();
-        self.region_cells(seeds, &mut cells, &mut marks);
-        self.region_vertices(&cells, &mut vertices, &mut marks);
+        self.region_vertices(region.cells(self), &mut vertices, &mut marks);
         stats.smoothed += self.smooth_vertices(&vertices);
-        stats.flips += K::improve_connectivity_near(self, seeds, params);
-        self.region_cells(seeds, &mut cells, &mut marks);
+        stats.flips += K::improve_connectivity_in(self, &mut region, params);
+        cells.extend_from_slice(region.cells(self));
+        marks.clear();
+        marks.resize(self.cell_capacity(), false);
+        for &c in &cells {
+            marks[c.index()] = true;
+        }
         self.grow_region(&mut cells, &mut marks);
         let (safe, unsafe_, splits) = self.remove_degenerate_in(&cells, params);
+        if safe + unsafe_ + splits > 0 {
+            region.invalidate();
+        }
         stats.safe_collapses += safe;
         stats.unsafe_collapses += unsafe_;
         stats.degenerate_splits += splits;
-        stats.flips += K::improve_connectivity_near(self, seeds, params);
+        stats.flips += K::improve_connectivity_in(self, &mut region, params);
         stats.smoothed += self.smooth_vertices(&vertices);
         stats
     }

@@ -10,5 +10,5 @@ mod params;
 mod resize;
 
 pub use deform::{DeformReport, Destinations};
-pub use improve::Connectivity;
+pub use improve::{Connectivity, Region};
 pub use params::{DscParams, ParamError};

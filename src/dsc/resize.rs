@@ -29,7 +29,8 @@ impl<K: Connectivity> Complex<K> {
         let mut stats = ResizeStats::default();
         let l = params.edge_length;
         let straight_cos = params.straight_angle_deg.to_radians().cos();
-        for (u, v) in self.interface_edges() {
+        let mut edges = self.interface_edges();
+        for &(u, v) in &edges {
             if self
                 .edge_length_if_alive(u, v)
                 .is_some_and(|len| len > params.max_length * l)
@@ -40,7 +41,12 @@ impl<K: Connectivity> Complex<K> {
                 }
             }
         }
-        for (u, v) in self.interface_edges() {
+        // A failed split leaves the cells as they were: without splits the
+        // interface edges stand.
+        if stats.interface_splits > 0 {
+            edges = self.interface_edges();
+        }
+        for (u, v) in edges {
             if self
                 .edge_length_if_alive(u, v)
                 .is_some_and(|len| len < params.min_length * l)
