@@ -36,12 +36,18 @@ impl<K: Dim> Complex<K> {
 
     /// The facet of `c` opposite local corner `i`, if it is on the interface
     /// and `c` is the smaller id of its two cells.
+    #[inline]
     fn interface_facet(&self, c: CellId, i: usize) -> Option<InterfaceFacet<K::Point>> {
         let nb = self.neighbours(c)[i]?;
         let (a, b) = (self.label(c), self.label(nb));
         if a == b || nb.index() < c.index() {
             return None;
         }
+        Some(self.facet_between(c, i, a, b))
+    }
+
+    /// The facet of `c` opposite local corner `i`, between phases `a` and `b`.
+    fn facet_between(&self, c: CellId, i: usize, a: Label, b: Label) -> InterfaceFacet<K::Point> {
         let pts = self.cell_points(c);
         let verts = self.cell(c);
         let mut corners = [verts[0]; 3];
@@ -50,7 +56,7 @@ impl<K: Dim> Complex<K> {
             corners[n] = verts[k];
             points[n] = pts[k];
         }
-        Some(InterfaceFacet {
+        InterfaceFacet {
             cell: c,
             opposite: i,
             a,
@@ -59,6 +65,6 @@ impl<K: Dim> Complex<K> {
             points,
             normal: K::facet_normal(&pts[..K::NV], i),
             measure: K::facet_measure(&pts[..K::NV], i),
-        })
+        }
     }
 }
