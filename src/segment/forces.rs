@@ -57,12 +57,12 @@ struct Acc<P> {
 }
 
 impl<P: Point> Acc<P> {
+    /// Empties the accumulator. The per-slot arrays are only read below
+    /// `np` and are zeroed when a slot opens, so they are left as they are
+    /// (every vertex is reset every iteration).
     fn reset(&mut self) {
         self.kind = ForceKind::Off;
         self.np = 0;
-        self.normal = [P::zero(); MAXP];
-        self.weight = [0.0; MAXP];
-        self.ncnt = [0.0; MAXP];
         self.ext = P::zero();
         self.share = 0.0;
     }
@@ -75,6 +75,9 @@ impl<P: Point> Acc<P> {
         }
         if self.np < MAXP {
             self.phases[self.np] = l;
+            self.normal[self.np] = P::zero();
+            self.weight[self.np] = 0.0;
+            self.ncnt[self.np] = 0.0;
             self.np += 1;
             Some(self.np - 1)
         } else {
