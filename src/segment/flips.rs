@@ -170,8 +170,12 @@ impl Flipper {
                     if let Some(t) = cand {
                         consider(t);
                     }
+                    // (tested here first: most cells are inside a phase)
                     for nb in complex.neighbours(c).iter().flatten() {
-                        consider(complex.label(*nb));
+                        let l = complex.label(*nb);
+                        if l != own {
+                            consider(l);
+                        }
                     }
                     best.map(|(_, l)| l)
                 }
