@@ -66,9 +66,6 @@ pub struct CellCache<K: Dim> {
     image: (usize, usize),
     /// [`Complex::compactions`] at the last call.
     generation: u64,
-    /// Scratch for renumbering.
-    spare_corners: Vec<Option<[K::Point; 4]>>,
-    spare_stats: Vec<CellStats>,
 }
 
 impl<K: Raster> Default for CellCache<K> {
@@ -84,8 +81,6 @@ impl<K: Raster> CellCache<K> {
             corners: Vec::new(),
             image: (0, 0),
             generation: 0,
-            spare_corners: Vec::new(),
-            spare_stats: Vec::new(),
         }
     }
 
@@ -114,20 +109,19 @@ impl<K: Raster> CellCache<K> {
         } else if generation == self.generation + 1 {
             // One compaction since the last call: carry every cached cell to
             // its new id (whatever it holds there is checked below anyway).
+            // Compaction keeps the order, so new ids never exceed old ones
+            // and the entries move forward in place.
             let map = complex.last_cell_map();
-            let n = map.iter().flatten().count();
-            self.spare_corners.clear();
-            self.spare_corners.resize(n, None);
-            self.spare_stats.clear();
-            self.spare_stats.resize(n, CellStats::default());
+            let mut kept = 0;
             for (old, new) in map.iter().enumerate().take(self.corners.len()) {
                 if let Some(new) = new {
-                    self.spare_corners[new.index()] = self.corners[old];
-                    self.spare_stats[new.index()] = out[old];
+                    self.corners[new.index()] = self.corners[old];
+                    out[new.index()] = out[old];
+                    kept = new.index() + 1;
                 }
             }
-            std::mem::swap(&mut self.corners, &mut self.spare_corners);
-            std::mem::swap(out, &mut self.spare_stats);
+            self.corners.truncate(kept);
+            out.truncate(kept);
         }
         self.generation = generation;
         out.resize(cap, CellStats::default());
