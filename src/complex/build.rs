@@ -144,6 +144,8 @@ impl<K: Dim> Complex<K> {
             compactions: 0,
             last_cell_map: Vec::new(),
             last_vertex_map: Vec::new(),
+            moved_at: vec![0; n_points],
+            move_clock: 0,
         };
         complex.reclassify_all();
         Ok(complex)

@@ -89,6 +89,8 @@ impl<K: Dim> Complex<K> {
     pub(crate) fn add_vertex(&mut self, p: K::Point) -> VertexId {
         let id = VertexId(self.positions.len() as u32);
         self.positions.push(p);
+        self.move_clock += 1;
+        self.moved_at.push(self.move_clock);
         self.vertex_cell.push(None);
         self.classes.push(super::VertexClass {
             kind: super::VertexKind::Interior,

@@ -46,6 +46,10 @@ pub struct Complex<K: Dim> {
     last_cell_map: Vec<Option<CellId>>,
     /// The old-to-new vertex map of the last compaction.
     last_vertex_map: Vec<Option<VertexId>>,
+    /// Per vertex: the value of `move_clock` when it was created or last moved.
+    moved_at: Vec<u64>,
+    /// Counts vertex moves and creations.
+    move_clock: u64,
 }
 
 /// A triangle complex.
@@ -297,6 +301,21 @@ impl<K: Dim> Complex<K> {
     /// ([`Complex::move_towards`](crate::ops) does).
     pub(crate) fn set_position(&mut self, v: VertexId, p: K::Point) {
         self.positions[v.index()] = p;
+        self.move_clock += 1;
+        self.moved_at[v.index()] = self.move_clock;
+    }
+
+    /// A counter that advances with every vertex move or creation: a result
+    /// computed from positions at clock `t` still holds for the vertices whose
+    /// [`moved_at`](Self::moved_at) is at most `t`.
+    pub fn move_clock(&self) -> u64 {
+        self.move_clock
+    }
+
+    /// The [`move_clock`](Self::move_clock) when `v` was created or last moved.
+    #[inline]
+    pub fn moved_at(&self, v: VertexId) -> u64 {
+        self.moved_at[v.index()]
     }
 
     /// The largest label in use plus one.
@@ -344,11 +363,13 @@ impl<K: Dim> Complex<K> {
             if let Some(new) = *new {
                 let k = new.index();
                 self.positions[k] = self.positions[i];
+                self.moved_at[k] = self.moved_at[i];
                 self.classes[k] = self.classes[i];
                 self.vertex_cell[k] = self.vertex_cell[i].and_then(|c| cmap[c.index()]);
             }
         }
         self.positions.truncate(n as usize);
+        self.moved_at.truncate(n as usize);
         self.classes.truncate(n as usize);
         self.vertex_cell.truncate(n as usize);
         for (i, new) in cmap.iter().enumerate() {

@@ -6,7 +6,7 @@ use super::{Connectivity, DscParams};
 use crate::complex::{Complex, VertexId};
 use crate::dim::Dim;
 use crate::dim::Point;
-use crate::ops::{CollapseMode, MoveOutcome};
+use crate::ops::{CollapseMode, MoveOutcome, SmoothMemo};
 use serde::Serialize;
 
 /// Destinations for some vertices, indexed by vertex id.
@@ -80,6 +80,7 @@ impl<K: Connectivity> Complex<K> {
             .collect();
         let requested = pending.len();
         let mut touched = pending.clone();
+        let mut memo = SmoothMemo::new();
         while !pending.is_empty() && report.rounds < params.max_rounds {
             report.rounds += 1;
             let movers = pending.clone();
@@ -99,12 +100,18 @@ impl<K: Connectivity> Complex<K> {
                 }
             });
             report.snapped += self.snap_to_border(&mut pending, destinations, params);
-            add(&mut report.improve, self.improve_near(&movers, params));
+            add(
+                &mut report.improve,
+                self.improve_near_with(&movers, params, &mut memo),
+            );
         }
         report.stopped_short = requested - report.arrived - report.snapped;
         report.resize = self.resize(params, &mut touched);
         touched.retain(|&v| self.is_vertex_alive(v));
-        add(&mut report.improve, self.improve_near(&touched, params));
+        add(
+            &mut report.improve,
+            self.improve_near_with(&touched, params, &mut memo),
+        );
         self.compact_in_place();
         report
     }

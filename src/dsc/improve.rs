@@ -3,7 +3,7 @@
 use super::DscParams;
 use crate::complex::{CellId, Complex, Rejection, VertexId};
 use crate::dim::{Dim, D2, D3};
-use crate::ops::CollapseMode;
+use crate::ops::{CollapseMode, SmoothMemo};
 use serde::Serialize;
 
 /// The dimension-specific connectivity improvement (2D edge flips, 3D flips).
@@ -188,13 +188,25 @@ impl<K: Connectivity> Complex<K> {
     /// deform loop passes the vertices it moved, so the cost follows the
     /// interface, not the mesh.
     pub fn improve_near(&mut self, seeds: &[VertexId], params: &DscParams) -> ImproveStats {
+        self.improve_near_with(seeds, params, &mut SmoothMemo::new())
+    }
+
+    /// [`improve_near`](Self::improve_near) remembering, in `memo`, the
+    /// vertices smoothing leaves in place (for the next calls before the
+    /// complex is compacted).
+    pub fn improve_near_with(
+        &mut self,
+        seeds: &[VertexId],
+        params: &DscParams,
+        memo: &mut SmoothMemo,
+    ) -> ImproveStats {
         let mut stats = ImproveStats::default();
         let mut region = Region::around(seeds);
         let mut cells = Vec::new();
         let mut marks = Vec::new();
         let mut vertices = Vec::new();
         self.region_vertices(region.cells(self), &mut vertices, &mut marks);
-        stats.smoothed += self.smooth_vertices(&vertices);
+        stats.smoothed += self.smooth_vertices(&vertices, memo);
         stats.flips += K::improve_connectivity_in(self, &mut region, params);
         cells.extend_from_slice(region.cells(self));
         marks.clear();
@@ -211,7 +223,7 @@ impl<K: Connectivity> Complex<K> {
         stats.unsafe_collapses += unsafe_;
         stats.degenerate_splits += splits;
         stats.flips += K::improve_connectivity_in(self, &mut region, params);
-        stats.smoothed += self.smooth_vertices(&vertices);
+        stats.smoothed += self.smooth_vertices(&vertices, memo);
         stats
     }
 
@@ -272,11 +284,11 @@ impl<K: Connectivity> Complex<K> {
     }
 
     /// One Laplacian pass over the given vertices (interface vertices are skipped).
-    pub fn smooth_vertices(&mut self, vertices: &[VertexId]) -> usize {
+    pub fn smooth_vertices(&mut self, vertices: &[VertexId], memo: &mut SmoothMemo) -> usize {
         let mut star = Vec::new();
         vertices
             .iter()
-            .filter(|&&v| self.smooth_vertex(v, &mut star))
+            .filter(|&&v| self.smooth_vertex(v, &mut star, memo))
             .count()
     }
 

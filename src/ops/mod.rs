@@ -13,3 +13,4 @@ mod split;
 pub use collapse::CollapseMode;
 pub use flip3d::{Flip3, MAX_RING};
 pub use relocate::MoveOutcome;
+pub use smooth::SmoothMemo;
