@@ -1,0 +1,45 @@
+//! A fixed workload for instruction counts of the cell statistics (the
+//! rasteriser and the sums), one thread: every cell of the 512² two-phase
+//! box mesh and of the same mesh after 20 iterations, integrated `ROUNDS`
+//! times. Prints a checksum of the statistics' bits, so a change that is meant
+//! to keep them can be checked in the same run:
+//!
+//! `valgrind --tool=callgrind --toggle-collect=*measured_rounds* target/release/examples/statistics_workload`
+use dsc_seg::complex::Complex;
+use dsc_seg::dim::D2;
+use dsc_seg::phantom::shapes2d;
+use dsc_seg::segment::integrate::cell_stats;
+use dsc_seg::segment::{ImageView, SegmentParams, Segmentation};
+
+const ROUNDS: usize = 5;
+
+/// The measured part: returns a checksum of every statistic's bits.
+#[inline(never)]
+fn measured_rounds(meshes: &[&Complex<D2>], image: &ImageView<'_>) -> u64 {
+    let mut h = 0u64;
+    for _ in 0..ROUNDS {
+        for mesh in meshes {
+            for c in mesh.cell_ids() {
+                let s = cell_stats::<D2>(image, &mesh.cell_points(c)[..3]);
+                for x in [s.sum.to_bits(), s.sum_sq.to_bits(), s.count as u64] {
+                    h = (h ^ x).wrapping_mul(0x100000001b3);
+                }
+            }
+        }
+    }
+    h
+}
+
+fn main() {
+    let p = shapes2d::two_phase(512, 0.2, 1);
+    let image = ImageView::new_2d(p.width, p.height, &p.image).unwrap();
+    let mut seg = Segmentation::<D2>::new(image, SegmentParams::new(2)).unwrap();
+    let start = seg.complex().clone();
+    for _ in 0..20 {
+        seg.step();
+    }
+    println!(
+        "checksum {:016x}",
+        measured_rounds(&[&start, seg.complex()], &image)
+    );
+}
