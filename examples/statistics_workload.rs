@@ -1,8 +1,9 @@
 //! A fixed workload for instruction counts of the cell statistics (the
 //! rasteriser and the sums), one thread: every cell of the 512² two-phase
 //! box mesh and of the same mesh after 20 iterations, integrated `ROUNDS`
-//! times. Prints a checksum of the statistics' bits, so a change that is meant
-//! to keep them can be checked in the same run:
+//! times (5, or the first argument). Prints a checksum of the statistics'
+//! bits, so a change that is meant to keep them can be checked in the same
+//! run, and the wall-clock time per round:
 //!
 //! `valgrind --tool=callgrind --toggle-collect=*measured_rounds* target/release/examples/statistics_workload`
 use dsc_seg::complex::Complex;
@@ -11,13 +12,11 @@ use dsc_seg::phantom::shapes2d;
 use dsc_seg::segment::integrate::cell_stats;
 use dsc_seg::segment::{ImageView, SegmentParams, Segmentation};
 
-const ROUNDS: usize = 5;
-
 /// The measured part: returns a checksum of every statistic's bits.
 #[inline(never)]
-fn measured_rounds(meshes: &[&Complex<D2>], image: &ImageView<'_>) -> u64 {
+fn measured_rounds(rounds: usize, meshes: &[&Complex<D2>], image: &ImageView<'_>) -> u64 {
     let mut h = 0u64;
-    for _ in 0..ROUNDS {
+    for _ in 0..rounds {
         for mesh in meshes {
             for c in mesh.cell_ids() {
                 let s = cell_stats::<D2>(image, &mesh.cell_points(c)[..3]);
@@ -38,8 +37,11 @@ fn main() {
     for _ in 0..20 {
         seg.step();
     }
-    println!(
-        "checksum {:016x}",
-        measured_rounds(&[&start, seg.complex()], &image)
-    );
+    let rounds = std::env::args()
+        .nth(1)
+        .map_or(5, |a| a.parse().expect("ROUNDS"));
+    let t = std::time::Instant::now();
+    let sum = measured_rounds(rounds, &[&start, seg.complex()], &image);
+    let per_round = t.elapsed().as_secs_f64() / rounds as f64;
+    println!("checksum {sum:016x}, {:.1} µs per round", per_round * 1e6);
 }
