@@ -1,8 +1,9 @@
 //! Segmentation benchmarks (speed issue): (a) the image statistics of one
 //! iteration next to a plain sum over the same image, so their ratio is
-//! measured; (d) full segmentations of the peers' phantoms.
+//! measured; (b) the forces of one iteration; (d) full segmentations of the
+//! peers' phantoms.
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use dsc_seg::complex::Complex;
 use dsc_seg::dim::D2;
 use dsc_seg::phantom::shapes2d;
@@ -50,6 +51,64 @@ fn statistics(c: &mut Criterion) {
     group.bench_function("cached_unchanged", |b| {
         b.iter(|| cache.integrate(&mesh, &image, &mut cells))
     });
+    one_iteration_cached(&mut group, &image);
+    group.finish();
+}
+
+/// Iterations run before the measured state: past the first large moves,
+/// the interface still sweeping.
+const WARM_UP_ITERATIONS: usize = 10;
+
+/// A 512² two-phase segmentation after [`WARM_UP_ITERATIONS`] steps.
+fn mid_run<'a>(image: ImageView<'a>) -> Segmentation<'a, D2> {
+    let mut seg = Segmentation::<D2>::new(image, SegmentParams::new(2)).unwrap();
+    for _ in 0..WARM_UP_ITERATIONS {
+        seg.step();
+    }
+    seg
+}
+
+/// The statistics of one real iteration as the driver computes them: a cache
+/// filled on the mesh before a step, integrating the mesh after it (only
+/// the cells the step moved or created are rasterised).
+fn one_iteration_cached(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    image: &ImageView<'_>,
+) {
+    let mut seg = mid_run(*image);
+    let before = seg.complex().clone();
+    seg.step();
+    let after = seg.complex();
+    let (mut cache, mut cells) = (CellCache::<D2>::new(), Vec::new());
+    cache.integrate(&before, image, &mut cells);
+    let n = cache.clone().integrate(after, image, &mut cells.clone());
+    eprintln!(
+        "one_iteration_cached: {n} of {} cells integrated",
+        after.cell_count()
+    );
+    group.bench_function("one_iteration_cached", |b| {
+        b.iter_batched(
+            || (cache.clone(), cells.clone()),
+            |(mut cache, mut cells)| {
+                cache.integrate(after, image, &mut cells);
+                (cache, cells)
+            },
+            BatchSize::LargeInput,
+        )
+    });
+}
+
+/// The force stage of one iteration (region force, rigidity, every term,
+/// the destinations) on the 512² two-phase state mid-run. Each call also
+/// integrates, through the cache, a mesh that has not moved (the
+/// `cached_unchanged` cost).
+fn forces(c: &mut Criterion) {
+    let p = shapes2d::two_phase(512, 0.2, 1);
+    let image = ImageView::new_2d(p.width, p.height, &p.image).unwrap();
+    let mut seg = mid_run(image);
+    seg.compute_forces();
+    let mut group = c.benchmark_group("forces_512");
+    group.bench_function("one_iteration", |b| b.iter(|| seg.compute_forces()));
     group.finish();
 }
 
@@ -75,5 +134,5 @@ fn full_runs(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, statistics, full_runs);
+criterion_group!(benches, statistics, forces, full_runs);
 criterion_main!(benches);

@@ -410,6 +410,67 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let data_energy = self.data_energy();
 
         let t = Instant::now();
+        let (length, max_disp) = self.forces_and_destinations(iteration);
+        self.times.forces += t.elapsed().as_secs_f64();
+        let l = self.dsc.edge_length;
+
+        let t = Instant::now();
+        if !self.dest.is_empty() {
+            self.complex.deform(&self.dest, &self.dsc);
+            // Reused: cleared before it is filled (and grown by `set`).
+        }
+        self.times.deform += t.elapsed().as_secs_f64();
+
+        let rec = IterationRecord {
+            iteration,
+            energy: data_energy + self.nu * length,
+            data_energy,
+            length,
+            flips,
+            max_displacement: max_disp / l,
+            means: self.phases.mean.clone(),
+            junctions: self.forces.junctions,
+        };
+        // Under noise a fixed step never lets every vertex settle: once the
+        // energy has not reached a new low for `STALL_ITERATIONS`, halve the
+        // step (down to 1/16 of the parameter).
+        if rec.energy < self.best_energy - 3e-4 * rec.energy.abs() {
+            self.best_energy = rec.energy;
+            self.stalled = 0;
+        } else {
+            self.stalled += 1;
+            if self.stalled >= STALL_ITERATIONS {
+                self.step = (self.step * 0.5).max(self.params.step_fraction / 16.0);
+                self.stalled = 0;
+            }
+        }
+        if flips == 0 && rec.max_displacement < self.params.converge_displacement {
+            self.quiet_iterations += 1;
+        } else {
+            self.quiet_iterations = 0;
+        }
+        self.history.push(rec.clone());
+        rec
+    }
+
+    /// What the next [`step`](Self::step) does before it deforms, without
+    /// its flips: the image statistics of the current complex (cached, so
+    /// only moved cells are integrated) and the force stage, which fills
+    /// [`field`](Self::field), runs every force term and sets the
+    /// destinations. Nothing moves. Returns the largest requested
+    /// displacement in units of L. For benchmarks (a second call measures
+    /// the forces, the statistics then being unchanged) and inspection; a
+    /// force term with state of its own sees one more call.
+    pub fn compute_forces(&mut self) -> f64 {
+        self.integrate();
+        let (_, max_disp) = self.forces_and_destinations(self.history.len() + 1);
+        max_disp / self.dsc.edge_length
+    }
+
+    /// Computes the forces of iteration `iteration` and fills the
+    /// destinations; returns the interface measure and the largest
+    /// displacement (pixels).
+    fn forces_and_destinations(&mut self, iteration: usize) -> (f64, f64) {
         let l = self.dsc.edge_length;
         let settings = ForceSettings {
             model: self.params.force,
@@ -483,45 +544,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 self.dest.set(v, target);
             }
         }
-        self.times.forces += t.elapsed().as_secs_f64();
-
-        let t = Instant::now();
-        if !self.dest.is_empty() {
-            self.complex.deform(&self.dest, &self.dsc);
-            // Reused: cleared before it is filled (and grown by `set`).
-        }
-        self.times.deform += t.elapsed().as_secs_f64();
-
-        let rec = IterationRecord {
-            iteration,
-            energy: data_energy + self.nu * length,
-            data_energy,
-            length,
-            flips,
-            max_displacement: max_disp / l,
-            means: self.phases.mean.clone(),
-            junctions: self.forces.junctions,
-        };
-        // Under noise a fixed step never lets every vertex settle: once the
-        // energy has not reached a new low for `STALL_ITERATIONS`, halve the
-        // step (down to 1/16 of the parameter).
-        if rec.energy < self.best_energy - 3e-4 * rec.energy.abs() {
-            self.best_energy = rec.energy;
-            self.stalled = 0;
-        } else {
-            self.stalled += 1;
-            if self.stalled >= STALL_ITERATIONS {
-                self.step = (self.step * 0.5).max(self.params.step_fraction / 16.0);
-                self.stalled = 0;
-            }
-        }
-        if flips == 0 && rec.max_displacement < self.params.converge_displacement {
-            self.quiet_iterations += 1;
-        } else {
-            self.quiet_iterations = 0;
-        }
-        self.history.push(rec.clone());
-        rec
+        (length, max_disp)
     }
 
     /// Adds the smoothing terms to the displacement: term `b` with

@@ -166,11 +166,16 @@ fn same_corners<K: Dim>(a: &[K::Point; 4], b: &[K::Point; 4]) -> bool {
 pub fn cell_stats<K: Raster>(image: &ImageView<'_>, corners: &[K::Point]) -> CellStats {
     let (mut sum, mut sum_sq, mut count) = (0.0f64, 0.0f64, 0usize);
     K::cell_spans(image, corners, &mut |a, b| {
+        // The running sums are copied into locals for the span: the
+        // closure holds them by reference, and summing through it kept
+        // them in memory, a store and a reload on every pixel.
+        let (mut s, mut s2) = (sum, sum_sq);
         for &v in &image.data[a..b] {
             let v = v as f64;
-            sum += v;
-            sum_sq += v * v;
+            s += v;
+            s2 += v * v;
         }
+        (sum, sum_sq) = (s, s2);
         count += b - a;
     });
     CellStats {
