@@ -3,7 +3,7 @@
 use super::error::SegmentError;
 use super::forces::{ForceField, ForceSettings};
 use super::image::ImageView;
-use super::integrate::{integrate_cells, CellCache, CellStats, PhaseStats};
+use super::integrate::{CellCache, CellStats, PhaseStats};
 use super::model::{Flow, ForceContext, InitContext, LabelContext, Models, TermKind};
 use super::params::SegmentParams;
 use super::raster::Raster;
@@ -215,7 +215,10 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             None => K::box_complex(&image, l)?,
         };
         let mut cells = Vec::new();
-        integrate_cells(&complex, &image, &mut cells);
+        // Through the cache: the initialisation relabels cells but rarely
+        // moves them, so the first step finds them integrated already.
+        let mut cell_cache = CellCache::new();
+        cell_cache.integrate(&complex, &image, &mut cells);
         let mut hints = if given {
             vec![None; params.phases]
         } else {
@@ -251,7 +254,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             dsc,
             complex,
             cells,
-            cell_cache: CellCache::new(),
+            cell_cache,
             phases,
             forces: ForceField::new(),
             models,
