@@ -66,6 +66,9 @@ pub struct CellCache<K: Dim> {
     image: (usize, usize),
     /// [`Complex::compactions`] at the last call.
     generation: u64,
+    /// Scratch: the cells to integrate, with their ordering key.
+    changed: Vec<(u64, CellId)>,
+    fresh: Vec<CellStats>,
 }
 
 impl<K: Raster> Default for CellCache<K> {
@@ -81,6 +84,8 @@ impl<K: Raster> CellCache<K> {
             corners: Vec::new(),
             image: (0, 0),
             generation: 0,
+            changed: Vec::new(),
+            fresh: Vec::new(),
         }
     }
 
@@ -126,28 +131,79 @@ impl<K: Raster> CellCache<K> {
         self.generation = generation;
         out.resize(cap, CellStats::default());
         self.corners.resize(cap, None);
-        out.par_iter_mut()
-            .zip(self.corners.par_iter_mut())
-            .enumerate()
-            .map(|(i, (s, k))| {
-                let c = CellId(i as u32);
-                if !complex.is_alive(c) {
-                    *s = CellStats::default();
-                    *k = None;
-                    return 0;
-                }
-                let pts = complex.cell_points(c);
-                if let Some(old) = k {
-                    if same_corners::<K>(old, &pts) {
-                        return 0;
-                    }
-                }
-                *s = cell_stats::<K>(image, &pts[..K::NV]);
-                *k = Some(pts);
-                1
-            })
-            .sum()
+        self.find_changed(complex, out);
+        self.integrate_changed(image, out);
+        self.changed.len()
     }
+
+    /// Lists the live cells whose corners changed (recording their new
+    /// corners) with their [`spatial_key`]; zeroes the statistics of dead
+    /// cells. In parallel only for a large complex (see [`PARALLEL_BATCH`]).
+    fn find_changed(&mut self, complex: &Complex<K>, out: &mut [CellStats]) {
+        self.changed.clear();
+        let check = |(i, (s, k)): (usize, (&mut CellStats, &mut Option<[K::Point; 4]>))| {
+            let c = CellId(i as u32);
+            if !complex.is_alive(c) {
+                *s = CellStats::default();
+                *k = None;
+                return None;
+            }
+            let pts = complex.cell_points(c);
+            if k.is_some_and(|old| same_corners::<K>(&old, &pts)) {
+                return None;
+            }
+            *k = Some(pts);
+            Some((spatial_key::<K>(&pts), c))
+        };
+        if out.len() >= 8 * PARALLEL_BATCH {
+            let cells = out.par_iter_mut().zip(self.corners.par_iter_mut());
+            self.changed.par_extend(cells.enumerate().filter_map(check));
+        } else {
+            let cells = out.iter_mut().zip(self.corners.iter_mut());
+            self.changed.extend(cells.enumerate().filter_map(check));
+        }
+    }
+
+    /// Integrates the changed cells in image order and stores their
+    /// statistics. Each cell's sums are its own, so the order changes no
+    /// bit; image order makes neighbouring cells share the image rows they
+    /// read, which id order (new cells are scattered along the interface)
+    /// fetched again from memory for every cell. Threads only pay for a
+    /// large batch: waking them costs more than the few thousand cells of
+    /// a typical step (measured, 2 cores).
+    fn integrate_changed(&mut self, image: &ImageView<'_>, out: &mut [CellStats]) {
+        self.changed.sort_unstable_by_key(|&(key, _)| key);
+        let corners = &self.corners;
+        let stats_of = |&(_, c): &(u64, CellId)| {
+            let pts = corners[c.index()].expect("changed cells have corners");
+            cell_stats::<K>(image, &pts[..K::NV])
+        };
+        if self.changed.len() >= PARALLEL_BATCH {
+            self.changed
+                .par_iter()
+                .map(stats_of)
+                .collect_into_vec(&mut self.fresh);
+            for (&(_, c), &st) in self.changed.iter().zip(&self.fresh) {
+                out[c.index()] = st;
+            }
+        } else {
+            for entry in &self.changed {
+                out[entry.1.index()] = stats_of(entry);
+            }
+        }
+    }
+}
+
+/// Cells to integrate from which threads pay off.
+const PARALLEL_BATCH: usize = 8192;
+
+/// Orders cells by the position of their first corner along the last two
+/// axes: pixel row then column in 2D, slice then row in 3D. Any order gives
+/// the same statistics; this one reads the image nearly in memory order.
+#[inline]
+fn spatial_key<K: Dim>(pts: &[K::Point; 4]) -> u64 {
+    let coord = |axis: usize| pts[0][axis].clamp(0.0, u32::MAX as f64) as u64;
+    (coord(K::N - 1) << 32) | coord(K::N - 2)
 }
 
 /// Whether the first `NV` corners are bit-for-bit equal.
@@ -243,6 +299,23 @@ mod tests {
     use crate::dim::D2;
     use crate::dsc::{Destinations, DscParams};
     use nalgebra::Vector2;
+
+    /// A complex large enough for the parallel scan and integration.
+    #[test]
+    fn large_batches_give_the_same_statistics_in_parallel() {
+        let (w, h) = (400usize, 300usize);
+        let data: Vec<f32> = (0..w * h)
+            .map(|i| ((i * 31 % 997) as f32) / 997.0)
+            .collect();
+        let image = ImageView::new_2d(w, h, &data).unwrap();
+        let mesh = Complex::<D2>::rectangle(w as f64, h as f64, 1.5).unwrap();
+        assert!(mesh.cell_count() >= 8 * PARALLEL_BATCH);
+        let (mut cached, mut full) = (Vec::new(), Vec::new());
+        let n = CellCache::<D2>::new().integrate(&mesh, &image, &mut cached);
+        integrate_cells(&mesh, &image, &mut full);
+        assert_eq!(n, mesh.cell_count());
+        assert_eq!(cached, full);
+    }
 
     #[test]
     fn cached_integration_equals_full_integration() {
