@@ -48,6 +48,9 @@ pub fn integrate_cells<K: Raster>(
     });
 }
 
+/// A cell's corners when it was last integrated (`None`: not cached).
+type CachedCorners<K> = Option<[<K as Dim>::Point; 4]>;
+
 /// Cell statistics kept between iterations, so that only the cells that
 /// changed are integrated again.
 ///
@@ -60,8 +63,8 @@ pub fn integrate_cells<K: Raster>(
 /// interface sweeps is integrated.
 #[derive(Clone, Debug)]
 pub struct CellCache<K: Dim> {
-    /// Corners at the last integration, per cell id (`None`: not cached).
-    corners: Vec<Option<[K::Point; 4]>>,
+    /// Corners at the last integration, per cell id.
+    corners: Vec<CachedCorners<K>>,
     /// The image the cache was filled from (address and length).
     image: (usize, usize),
     /// [`Complex::compactions`] at the last call.
@@ -141,7 +144,7 @@ impl<K: Raster> CellCache<K> {
     /// cells. In parallel only for a large complex (see [`PARALLEL_BATCH`]).
     fn find_changed(&mut self, complex: &Complex<K>, out: &mut [CellStats]) {
         self.changed.clear();
-        let check = |(i, (s, k)): (usize, (&mut CellStats, &mut Option<[K::Point; 4]>))| {
+        let check = |(i, (s, k)): (usize, (&mut CellStats, &mut CachedCorners<K>))| {
             let c = CellId(i as u32);
             if !complex.is_alive(c) {
                 *s = CellStats::default();
