@@ -6,7 +6,7 @@ use super::{Connectivity, DscParams};
 use crate::complex::{Complex, VertexId};
 use crate::dim::Dim;
 use crate::dim::Point;
-use crate::ops::{CollapseMode, MoveOutcome, SmoothMemo};
+use crate::ops::{CollapseMode, ImproveMemo, MoveOutcome};
 use serde::Serialize;
 
 /// Destinations for some vertices, indexed by vertex id.
@@ -80,7 +80,7 @@ impl<K: Connectivity> Complex<K> {
             .collect();
         let requested = pending.len();
         let mut touched = pending.clone();
-        let mut memo = SmoothMemo::new();
+        let mut memo = ImproveMemo::new();
         while !pending.is_empty() && report.rounds < params.max_rounds {
             report.rounds += 1;
             let movers = pending.clone();

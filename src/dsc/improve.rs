@@ -3,7 +3,7 @@
 use super::DscParams;
 use crate::complex::{CellId, Complex, Rejection, VertexId};
 use crate::dim::{Dim, D2, D3};
-use crate::ops::{CollapseMode, SmoothMemo};
+use crate::ops::{CollapseMode, ImproveMemo};
 use serde::Serialize;
 
 /// The dimension-specific connectivity improvement (2D edge flips, 3D flips).
@@ -11,15 +11,18 @@ pub trait Connectivity: Dim {
     /// Improves the connectivity of the cells of `region` (flips, at most a
     /// few sweeps); returns the number of changes. Leaves `region` current
     /// if it still is.
+    /// `memo` skips the tests whose answer is known (see [`ImproveMemo`]).
     fn improve_connectivity_in(
         complex: &mut Complex<Self>,
         region: &mut Region,
         params: &DscParams,
+        memo: &mut ImproveMemo,
     ) -> usize;
 
     /// One improvement pass over the whole complex; returns the number of changes.
     fn improve_connectivity(complex: &mut Complex<Self>, params: &DscParams) -> usize {
-        Self::improve_connectivity_in(complex, &mut Region::everything(), params)
+        let mut memo = ImproveMemo::new();
+        Self::improve_connectivity_in(complex, &mut Region::everything(), params, &mut memo)
     }
 }
 
@@ -86,42 +89,40 @@ impl Connectivity for D2 {
         complex: &mut Complex<D2>,
         region: &mut Region,
         _params: &DscParams,
+        memo: &mut ImproveMemo,
     ) -> usize {
-        flip_sweeps(complex, region)
+        flip_sweeps(complex, region, memo)
     }
 }
 
 /// Flips until nothing changes (at most 8 sweeps) over the region's cells.
 ///
-/// Positions and labels do not change during the sweeps, and a flip always
-/// creates cells with new (higher) ids, so an edge between two cells that
-/// both existed when the previous sweep began was tested there, was not
-/// flipped, and would not be now: a later sweep tests only the edges of
-/// cells created since. The flips made, and their order, are those of
-/// testing every edge.
-fn flip_sweeps(complex: &mut Complex<D2>, region: &mut Region) -> usize {
+/// An edge that `memo` knows was tested since its quad last changed is not
+/// tested again (it would not flip): a second sweep tests only around the
+/// flips of the first, and later passes in the same deform only where
+/// vertices moved. The flips made, and their order, are those of testing
+/// every edge.
+fn flip_sweeps(complex: &mut Complex<D2>, region: &mut Region, memo: &mut ImproveMemo) -> usize {
     let mut flips = 0;
-    // Cells with ids below this were all tested by the previous sweep.
-    let mut tested_below = 0;
     for _sweep in 0..8 {
         let mut changed = 0;
-        let sweep_start = complex.cell_capacity();
         for &c in region.cells(complex) {
+            let neighbours_below = complex.cell_capacity() as u32;
             for i in 0..3 {
                 if !complex.is_alive(c) {
                     break;
                 }
-                let settled = c.index() < tested_below
-                    && complex.neighbours(c)[i].is_none_or(|nb| nb.index() < tested_below);
-                if settled {
+                if memo.edge_settled(complex, c, i) {
                     continue;
                 }
                 if let Ok(true) = complex.flip_if_better(c, i) {
                     changed += 1;
                 }
             }
+            if complex.is_alive(c) {
+                memo.set_settled(complex, c, neighbours_below);
+            }
         }
-        tested_below = sweep_start;
         flips += changed;
         if changed == 0 {
             break;
@@ -140,6 +141,7 @@ impl Connectivity for D3 {
         complex: &mut Complex<D3>,
         region: &mut Region,
         params: &DscParams,
+        _memo: &mut ImproveMemo,
     ) -> usize {
         let mut flips = 0;
         for _sweep in 0..4 {
@@ -188,7 +190,7 @@ impl<K: Connectivity> Complex<K> {
     /// deform loop passes the vertices it moved, so the cost follows the
     /// interface, not the mesh.
     pub fn improve_near(&mut self, seeds: &[VertexId], params: &DscParams) -> ImproveStats {
-        self.improve_near_with(seeds, params, &mut SmoothMemo::new())
+        self.improve_near_with(seeds, params, &mut ImproveMemo::new())
     }
 
     /// [`improve_near`](Self::improve_near) remembering, in `memo`, the
@@ -198,7 +200,7 @@ impl<K: Connectivity> Complex<K> {
         &mut self,
         seeds: &[VertexId],
         params: &DscParams,
-        memo: &mut SmoothMemo,
+        memo: &mut ImproveMemo,
     ) -> ImproveStats {
         let mut stats = ImproveStats::default();
         let mut region = Region::around(seeds);
@@ -207,7 +209,7 @@ impl<K: Connectivity> Complex<K> {
         let mut vertices = Vec::new();
         self.region_vertices(region.cells(self), &mut vertices, &mut marks);
         stats.smoothed += self.smooth_vertices(&vertices, memo);
-        stats.flips += K::improve_connectivity_in(self, &mut region, params);
+        stats.flips += K::improve_connectivity_in(self, &mut region, params, memo);
         cells.extend_from_slice(region.cells(self));
         marks.clear();
         marks.resize(self.cell_capacity(), false);
@@ -222,7 +224,7 @@ impl<K: Connectivity> Complex<K> {
         stats.safe_collapses += safe;
         stats.unsafe_collapses += unsafe_;
         stats.degenerate_splits += splits;
-        stats.flips += K::improve_connectivity_in(self, &mut region, params);
+        stats.flips += K::improve_connectivity_in(self, &mut region, params, memo);
         stats.smoothed += self.smooth_vertices(&vertices, memo);
         stats
     }
@@ -284,7 +286,7 @@ impl<K: Connectivity> Complex<K> {
     }
 
     /// One Laplacian pass over the given vertices (interface vertices are skipped).
-    pub fn smooth_vertices(&mut self, vertices: &[VertexId], memo: &mut SmoothMemo) -> usize {
+    pub fn smooth_vertices(&mut self, vertices: &[VertexId], memo: &mut ImproveMemo) -> usize {
         let mut star = Vec::new();
         vertices
             .iter()

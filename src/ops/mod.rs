@@ -6,11 +6,12 @@
 mod collapse;
 mod flip2d;
 mod flip3d;
+mod memo;
 mod relocate;
 mod smooth;
 mod split;
 
 pub use collapse::CollapseMode;
 pub use flip3d::{Flip3, MAX_RING};
+pub use memo::ImproveMemo;
 pub use relocate::MoveOutcome;
-pub use smooth::SmoothMemo;

@@ -1,0 +1,179 @@
+//! What mesh improvement already verified, so that repeated passes over the
+//! same band skip the work whose answer cannot have changed.
+//!
+//! Within one `deform` call the improvement passes over the interface band
+//! four times or more, and most of the band never changes. Two facts make
+//! old answers reusable exactly: cells never change their vertices (an
+//! operation replaces cells, and new cells get ids above every old one),
+//! and every vertex move or creation advances the complex's move clock
+//! ([`Complex::moved_at`]). An answer computed from some cells and vertices
+//! at clock `t` holds while those cells are alive and none of those vertices
+//! has moved since `t`. Valid until the complex is compacted (the ids
+//! change), so one memo serves one `deform` call.
+
+use crate::complex::{CellId, Complex, VertexId};
+use crate::dim::{Dim, D2};
+
+/// A verdict: at move clock `clock`, when the cells alive had ids below `cells_below`.
+#[derive(Clone, Copy, Debug)]
+struct Stamp {
+    clock: u64,
+    cells_below: u32,
+}
+
+/// The verdicts of smoothing and edge flips, per vertex and per cell id.
+#[derive(Clone, Debug, Default)]
+pub struct ImproveMemo {
+    /// Per vertex: when smoothing last left it in place.
+    kept: Vec<Option<Stamp>>,
+    /// Per cell (2D): when all of its edges were last found not to flip.
+    settled: Vec<Option<Stamp>>,
+}
+
+impl ImproveMemo {
+    /// An empty memo.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Records that smoothing left `v` in place (`kept`) or moved it.
+    pub(crate) fn set_kept<K: Dim>(&mut self, complex: &Complex<K>, v: VertexId, kept: bool) {
+        let stamp = kept.then(|| stamp_of(complex));
+        put(&mut self.kept, v.index(), stamp);
+    }
+
+    /// Whether smoothing left `v` in place and its star (`star`, just
+    /// collected) has kept its cells and corners since.
+    pub(crate) fn still_kept<K: Dim>(
+        &self,
+        complex: &Complex<K>,
+        v: VertexId,
+        star: &[CellId],
+    ) -> bool {
+        let Some(stamp) = get(&self.kept, v.index()) else {
+            return false;
+        };
+        star.iter().all(|&c| unchanged_since(complex, c, stamp))
+    }
+
+    /// Records that no edge of `c` flipped when tested against the cells
+    /// with ids below `cells_below` (its neighbours then).
+    pub(crate) fn set_settled(&mut self, complex: &Complex<D2>, c: CellId, cells_below: u32) {
+        let stamp = Stamp {
+            clock: complex.move_clock(),
+            cells_below,
+        };
+        put(&mut self.settled, c.index(), Some(stamp));
+    }
+
+    /// Whether the edge of `c` opposite corner `i` was tested since its
+    /// quad last changed: `c` was settled with the same neighbour there,
+    /// and none of the quad's corners has moved since. Testing it again
+    /// would not flip it.
+    pub(crate) fn edge_settled(&self, complex: &Complex<D2>, c: CellId, i: usize) -> bool {
+        let Some(stamp) = get(&self.settled, c.index()) else {
+            return false;
+        };
+        match complex.neighbours(c)[i] {
+            None => true,
+            Some(nb) => unchanged_since(complex, c, stamp) && unchanged_since(complex, nb, stamp),
+        }
+    }
+}
+
+fn stamp_of<K: Dim>(complex: &Complex<K>) -> Stamp {
+    Stamp {
+        clock: complex.move_clock(),
+        cells_below: complex.cell_capacity() as u32,
+    }
+}
+
+/// Whether cell `c` existed at the stamp and none of its corners moved since.
+#[inline]
+fn unchanged_since<K: Dim>(complex: &Complex<K>, c: CellId, stamp: Stamp) -> bool {
+    c.0 < stamp.cells_below
+        && complex
+            .cell(c)
+            .iter()
+            .all(|&w| complex.moved_at(w) <= stamp.clock)
+}
+
+fn get(stamps: &[Option<Stamp>], i: usize) -> Option<Stamp> {
+    stamps.get(i).copied().flatten()
+}
+
+fn put(stamps: &mut Vec<Option<Stamp>>, i: usize, stamp: Option<Stamp>) {
+    if i >= stamps.len() {
+        stamps.resize(i + 1, None);
+    }
+    stamps[i] = stamp;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dsc::{Connectivity, Destinations, DscParams, Region};
+    use nalgebra::Vector2;
+
+    /// Flips and smoothing with one memo kept across rounds of vertex moves,
+    /// flips and smoothing do exactly what they do without one: the same
+    /// flips (same cells) and the same smoothing moves.
+    #[test]
+    fn memo_gives_the_answers_of_a_fresh_evaluation() {
+        let l = 4.0;
+        let mut mesh = Complex::<D2>::rectangle(60.0, 52.0, l).unwrap();
+        mesh.label_by(|p| u32::from((p - Vector2::new(30.0, 26.0)).norm() < 14.0));
+        let params = DscParams::new::<D2>(l);
+        // An irregular start: a few deform steps (which compact).
+        for step in 0..3 {
+            let mut dest = Destinations::new(&mesh);
+            for v in mesh.vertex_ids().collect::<Vec<_>>() {
+                let p = mesh.position(v);
+                let d = Vector2::new((p.y * 0.3 + step as f64).sin(), (p.x * 0.2).cos());
+                dest.set(v, mesh.constrain(v, p + d * l * 0.4));
+            }
+            mesh.deform(&dest, &params);
+        }
+        let (mut fresh, mut memoised) = (mesh.clone(), mesh);
+        let mut memo = ImproveMemo::new();
+        let mut star = Vec::new();
+        let mut total_flips = 0;
+        for round in 0..24 {
+            // Even rounds move every third vertex.
+            for c in [&mut fresh, &mut memoised] {
+                let ids: Vec<VertexId> = c.vertex_ids().collect();
+                for (k, &v) in ids.iter().enumerate() {
+                    if round % 2 == 0 && (k + round) % 3 == 0 {
+                        let p = c.position(v);
+                        let d = Vector2::new((k as f64).sin(), (round as f64 + k as f64).cos());
+                        c.move_towards(v, p + d * (0.6 * l), 1e-4 * l, &mut star);
+                    }
+                }
+            }
+            // Flips only after a round of smoothing (odd rounds).
+            if round % 2 == 1 {
+                let a = D2::improve_connectivity(&mut fresh, &params);
+                let b = D2::improve_connectivity_in(
+                    &mut memoised,
+                    &mut Region::everything(),
+                    &params,
+                    &mut memo,
+                );
+                assert_eq!(a, b, "round {round}: flips");
+                total_flips += a;
+            }
+            let ids: Vec<VertexId> = fresh.vertex_ids().collect();
+            let a = fresh.smooth_vertices(&ids, &mut ImproveMemo::new());
+            let b = memoised.smooth_vertices(&ids, &mut memo);
+            assert_eq!(a, b, "round {round}: smoothed");
+            for &v in &ids {
+                assert_eq!(fresh.position(v), memoised.position(v), "round {round}");
+            }
+            let cells = |c: &Complex<D2>| -> Vec<Vec<VertexId>> {
+                c.cell_ids().map(|x| c.cell(x).to_vec()).collect()
+            };
+            assert_eq!(cells(&fresh), cells(&memoised), "round {round}");
+        }
+        assert!(total_flips > 20, "{total_flips} flips: too few to test");
+    }
+}
