@@ -3,7 +3,7 @@
 use super::DscParams;
 use crate::complex::{CellId, Complex, Rejection, VertexId};
 use crate::dim::{Dim, D2, D3};
-use crate::ops::{CollapseMode, ImproveMemo};
+use crate::ops::{edge_settled, CollapseMode, ImproveMemo};
 use serde::Serialize;
 
 /// The dimension-specific connectivity improvement (2D edge flips, 3D flips).
@@ -108,11 +108,12 @@ fn flip_sweeps(complex: &mut Complex<D2>, region: &mut Region, memo: &mut Improv
         let mut changed = 0;
         for &c in region.cells(complex) {
             let neighbours_below = complex.cell_capacity() as u32;
+            let verdict = memo.settled_cell(complex, c);
             for i in 0..3 {
                 if !complex.is_alive(c) {
                     break;
                 }
-                if memo.edge_settled(complex, c, i) {
+                if verdict.is_some_and(|stamp| edge_settled(complex, c, i, stamp)) {
                     continue;
                 }
                 if let Ok(true) = complex.flip_if_better(c, i) {

@@ -16,7 +16,7 @@ use crate::dim::{Dim, D2};
 
 /// A verdict: at move clock `clock`, when the cells alive had ids below `cells_below`.
 #[derive(Clone, Copy, Debug)]
-struct Stamp {
+pub(crate) struct Stamp {
     clock: u64,
     cells_below: u32,
 }
@@ -66,19 +66,22 @@ impl ImproveMemo {
         put(&mut self.settled, c.index(), Some(stamp));
     }
 
-    /// Whether the edge of `c` opposite corner `i` was tested since its
-    /// quad last changed: `c` was settled with the same neighbour there,
-    /// and none of the quad's corners has moved since. Testing it again
-    /// would not flip it.
-    pub(crate) fn edge_settled(&self, complex: &Complex<D2>, c: CellId, i: usize) -> bool {
-        let Some(stamp) = get(&self.settled, c.index()) else {
-            return false;
-        };
-        match complex.neighbours(c)[i] {
-            None => true,
-            Some(nb) => unchanged_since(complex, c, stamp) && unchanged_since(complex, nb, stamp),
-        }
+    /// The verdict on `c`'s edges if it still stands for `c` itself: `c` was
+    /// settled and none of its corners has moved since. Each edge's verdict
+    /// then also needs its neighbour unchanged ([`edge_settled`]).
+    #[inline]
+    pub(crate) fn settled_cell(&self, complex: &Complex<D2>, c: CellId) -> Option<Stamp> {
+        get(&self.settled, c.index()).filter(|&stamp| unchanged_since(complex, c, stamp))
     }
+}
+
+/// Whether the edge of `c` opposite corner `i` was tested since its quad
+/// last changed, given the verdict `stamp` on `c` ([`ImproveMemo::settled_cell`]):
+/// the neighbour there existed then and none of its corners has moved
+/// since. Testing it again would not flip it.
+#[inline]
+pub(crate) fn edge_settled(complex: &Complex<D2>, c: CellId, i: usize, stamp: Stamp) -> bool {
+    complex.neighbours(c)[i].is_none_or(|nb| unchanged_since(complex, nb, stamp))
 }
 
 fn stamp_of<K: Dim>(complex: &Complex<K>) -> Stamp {
@@ -98,6 +101,7 @@ fn unchanged_since<K: Dim>(complex: &Complex<K>, c: CellId, stamp: Stamp) -> boo
             .all(|&w| complex.moved_at(w) <= stamp.clock)
 }
 
+#[inline]
 fn get(stamps: &[Option<Stamp>], i: usize) -> Option<Stamp> {
     stamps.get(i).copied().flatten()
 }

@@ -13,5 +13,6 @@ mod split;
 
 pub use collapse::CollapseMode;
 pub use flip3d::{Flip3, MAX_RING};
+pub(crate) use memo::edge_settled;
 pub use memo::ImproveMemo;
 pub use relocate::MoveOutcome;
