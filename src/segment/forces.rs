@@ -92,6 +92,9 @@ struct Facet {
     corners: [VertexId; 3],
     a: Label,
     b: Label,
+    /// Per corner, its accumulator's slots of `a` and `b` (filled once the
+    /// slots are final, for the boundary Laplacian).
+    slots: [[Option<u8>; 2]; 3],
 }
 
 /// The force model and sampling.
@@ -275,7 +278,12 @@ impl<K: Raster> ForceField<K> {
                 ..
             } = facet;
             self.interface_measure += meas;
-            self.facets.push(Facet { corners, a, b });
+            self.facets.push(Facet {
+                corners,
+                a,
+                b,
+                slots: [[None; 2]; 3],
+            });
             // neighbours along the boundaries of a and b
             #[allow(clippy::needless_range_loop)] // p, q index two parallel arrays
             for p in 0..nf {
@@ -339,6 +347,7 @@ impl<K: Raster> ForceField<K> {
         }
 
         // Umbrellas and bending: the boundary Laplacian applied twice.
+        self.fill_facet_slots();
         self.active.clear();
         for (i, acc) in self.acc.iter().enumerate() {
             if acc.kind != ForceKind::Off && !complex.class(VertexId(i as u32)).on_boundary() {
@@ -346,9 +355,9 @@ impl<K: Raster> ForceField<K> {
             }
         }
         let mut umbrella = std::mem::take(&mut self.stretching);
-        self.boundary_laplacian(&|i| complex.position(VertexId(i as u32)), &mut umbrella);
+        self.boundary_laplacian(|i| complex.position(VertexId(i as u32)), &mut umbrella);
         let mut bending = std::mem::take(&mut self.bending);
-        self.boundary_laplacian(&|i| umbrella[i], &mut bending);
+        self.boundary_laplacian(|i| umbrella[i], &mut bending);
         for &i in &self.active {
             let i = i as usize;
             bending[i] = if bending[i].is_finite() {
@@ -391,6 +400,17 @@ impl<K: Raster> ForceField<K> {
         }
     }
 
+    /// Looks up, once per computation, each facet corner's slots of the
+    /// facet's two phases (the Laplacian runs a dozen times per iteration).
+    fn fill_facet_slots(&mut self) {
+        for f in &mut self.facets {
+            for p in 0..K::N {
+                let acc = &self.acc[f.corners[p].index()];
+                f.slots[p] = [f.a, f.b].map(|l| acc.slot_of(l).map(|sl| sl as u8));
+            }
+        }
+    }
+
     /// The sector-averaged Laplacian along the phase boundaries of the last
     /// computation, applied to the per-vertex field `input`: at every vertex
     /// off the domain border, the mean over the phases around it of (the
@@ -398,7 +418,7 @@ impl<K: Raster> ForceField<K> {
     /// minus its own value). Applied to the positions it is the umbrella `ΔX`
     /// of the elasticity term; applied to the umbrella, minus the bending
     /// direction. Written into `out` at those vertices only.
-    fn boundary_laplacian(&mut self, input: &dyn Fn(usize) -> K::Point, out: &mut [K::Point]) {
+    fn boundary_laplacian(&mut self, input: impl Fn(usize) -> K::Point, out: &mut [K::Point]) {
         let nf = K::N;
         self.slot_sums
             .resize(self.acc.len(), [K::Point::zero(); MAXP]);
@@ -409,13 +429,11 @@ impl<K: Raster> ForceField<K> {
         }
         for f in &self.facets {
             for p in 0..nf {
-                let acc = &self.acc[f.corners[p].index()];
+                let sums = &mut self.slot_sums[f.corners[p].index()];
                 for q in (0..nf).filter(|&q| q != p) {
                     let x = input(f.corners[q].index());
-                    for l in [f.a, f.b] {
-                        if let Some(sl) = acc.slot_of(l) {
-                            self.slot_sums[f.corners[p].index()][sl] += x;
-                        }
+                    for sl in f.slots[p].iter().flatten() {
+                        sums[*sl as usize] += x;
                     }
                 }
             }
@@ -446,10 +464,10 @@ impl<K: Raster> ForceField<K> {
         let mut umbrella = std::mem::take(&mut self.scratch);
         umbrella.clear();
         umbrella.resize(input.len(), K::Point::zero());
-        self.boundary_laplacian(&|i| input[i], &mut umbrella);
+        self.boundary_laplacian(|i| input[i], &mut umbrella);
         out.clear();
         out.resize(input.len(), K::Point::zero());
-        self.boundary_laplacian(&|i| umbrella[i], out);
+        self.boundary_laplacian(|i| umbrella[i], out);
         for &i in &self.active {
             out[i as usize] = out[i as usize] * -1.0;
         }
@@ -461,7 +479,7 @@ impl<K: Raster> ForceField<K> {
     pub fn apply_umbrella(&mut self, input: &[K::Point], out: &mut Vec<K::Point>) {
         out.clear();
         out.resize(input.len(), K::Point::zero());
-        self.boundary_laplacian(&|i| input[i], out);
+        self.boundary_laplacian(|i| input[i], out);
     }
 }
 
