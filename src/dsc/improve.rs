@@ -297,7 +297,9 @@ impl<K: Connectivity> Complex<K> {
 
     /// Whether a cell is degenerate by quality, measure or edge length.
     pub fn is_degenerate(&self, c: CellId, params: &DscParams) -> bool {
-        if self.quality(c) < params.degenerate_quality
+        // (the exact comparison, without the square root of the quality)
+        let pts = self.cell_points(c);
+        if !K::quality_at_least(&pts[..K::NV], params.degenerate_quality)
             || self.measure(c) < params.measure::<K>(params.degenerate_measure)
         {
             return true;
