@@ -240,7 +240,8 @@ impl Flipper {
                 acc.sum += st.sum;
                 acc.sum_sq += st.sum_sq;
                 acc.count += st.count;
-                let pts = complex.cell_points(c);
+                // Corners only for the cells on the component's border.
+                let mut pts = None;
                 for (f, nb) in complex.neighbours(c).iter().enumerate() {
                     let Some(nb) = *nb else { continue };
                     let l = complex.label(nb);
@@ -250,6 +251,7 @@ impl Flipper {
                             self.stack.push(nb);
                         }
                     } else {
+                        let pts = pts.get_or_insert_with(|| complex.cell_points(c));
                         let m = K::facet_measure(&pts[..K::NV], f);
                         match self.shared.iter_mut().find(|(x, _)| *x == l) {
                             Some(e) => e.1 += m,
