@@ -113,6 +113,9 @@ pub struct ForceSettings {
 /// Per-vertex forces, with all scratch space kept between iterations.
 #[derive(Clone, Debug, Default)]
 pub struct ForceField<K: Dim> {
+    /// Per vertex id: what it is for the forces.
+    kinds: Vec<ForceKind>,
+    /// Per vertex id: sums of the interface vertices (valid where `kinds` is not `Off`).
     acc: Vec<Acc<K::Point>>,
     /// External (region) force per vertex id, dimensionless for eq. (6).
     pub external: Vec<K::Point>,
@@ -141,6 +144,7 @@ impl<K: Raster> ForceField<K> {
     /// Empty scratch space.
     pub fn new() -> Self {
         ForceField {
+            kinds: Vec::new(),
             acc: Vec::new(),
             external: Vec::new(),
             bending: Vec::new(),
@@ -160,7 +164,7 @@ impl<K: Raster> ForceField<K> {
 
     /// The force kind of `v` from the last computation.
     pub fn kind(&self, v: VertexId) -> ForceKind {
-        self.acc.get(v.index()).map_or(ForceKind::Off, |a| a.kind)
+        self.kinds.get(v.index()).copied().unwrap_or(ForceKind::Off)
     }
 
     /// Pieces and distinct labels around `v` with the reusable buffers.
@@ -243,13 +247,21 @@ impl<K: Raster> ForceField<K> {
         self.facets.clear();
         self.interface_measure = 0.0;
         self.junctions = (0, 0);
+        self.kinds.clear();
+        self.kinds.resize(nv, ForceKind::Off);
         for i in 0..nv {
-            self.acc[i].reset();
             let v = VertexId(i as u32);
             if !complex.is_vertex_alive(v) {
                 continue;
             }
             let kind = self.classify(complex, v);
+            self.kinds[i] = kind;
+            if kind == ForceKind::Off {
+                // Only the interface's accumulators are read: the rest of
+                // them (most) are not touched, nor reset.
+                continue;
+            }
+            self.acc[i].reset();
             self.acc[i].kind = kind;
             match kind {
                 ForceKind::TripleJunction => {
@@ -349,8 +361,8 @@ impl<K: Raster> ForceField<K> {
         // Umbrellas and bending: the boundary Laplacian applied twice.
         self.fill_facet_slots();
         self.active.clear();
-        for (i, acc) in self.acc.iter().enumerate() {
-            if acc.kind != ForceKind::Off && !complex.class(VertexId(i as u32)).on_boundary() {
+        for (i, &kind) in self.kinds.iter().enumerate() {
+            if kind != ForceKind::Off && !complex.class(VertexId(i as u32)).on_boundary() {
                 self.active.push(i as u32);
             }
         }
@@ -373,6 +385,9 @@ impl<K: Raster> ForceField<K> {
         self.bending = bending;
 
         for i in 0..nv {
+            if self.kinds[i] == ForceKind::Off {
+                continue;
+            }
             let acc = &self.acc[i];
             let mut f = K::Point::zero();
             match acc.kind {
