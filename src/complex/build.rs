@@ -1,12 +1,11 @@
 //! Construction: from arrays, regular box meshes at an edge length, and (2D)
 //! meshes conforming to user polygons.
 
-use super::cavity::facet_key;
+use super::cavity::{facet_key, FacetKey};
 use super::{CellId, Complex, Label, VertexClass, VertexId, VertexKind};
 use crate::dim::{Dim, Point, D2, D3};
 use nalgebra::{Vector2, Vector3};
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
-use std::collections::HashMap;
 use thiserror::Error;
 
 /// Why a complex could not be built from the given data.
@@ -96,25 +95,7 @@ impl<K: Dim> Complex<K> {
             }
         }
         let n_cells = cells.len();
-        let mut neighbours = vec![K::no_neighbours(); n_cells];
-        let mut open: HashMap<[u32; 3], (usize, usize)> = HashMap::with_capacity(n_cells * 2);
-        for (ci, cell) in cells.iter().enumerate() {
-            for i in 0..K::NV {
-                let key = facet_key(cell.as_ref(), i);
-                match open.remove(&key) {
-                    Some((cj, j)) => {
-                        if neighbours[cj].as_ref()[j].is_some() {
-                            return Err(BuildError::NonManifold(ci));
-                        }
-                        neighbours[cj].as_mut()[j] = Some(CellId(ci as u32));
-                        neighbours[ci].as_mut()[i] = Some(CellId(cj as u32));
-                    }
-                    None => {
-                        open.insert(key, (ci, i));
-                    }
-                }
-            }
-        }
+        let neighbours = glue_facets::<K>(&cells)?;
         let mut vertex_cell = vec![None; points.len()];
         for (ci, cell) in cells.iter().enumerate() {
             for &v in cell.as_ref() {
@@ -174,6 +155,31 @@ impl<K: Dim> Complex<K> {
         }
         self.reclassify_all();
     }
+}
+
+/// The neighbour across every facet: the facets of all cells sorted by
+/// their vertices, so each shared facet appears as two consecutive entries.
+/// A facet held by more than two cells is rejected (non-manifold).
+fn glue_facets<K: Dim>(cells: &[K::Cell]) -> Result<Vec<K::Neighbours>, BuildError> {
+    let mut facets: Vec<(FacetKey, u32, u8)> = Vec::with_capacity(cells.len() * K::NV);
+    for (ci, cell) in cells.iter().enumerate() {
+        for i in 0..K::NV {
+            facets.push((facet_key(cell.as_ref(), i), ci as u32, i as u8));
+        }
+    }
+    facets.sort_unstable();
+    let mut neighbours = vec![K::no_neighbours(); cells.len()];
+    for run in facets.chunk_by(|x, y| x.0 == y.0) {
+        match run {
+            [_] => {}
+            [(_, a, i), (_, b, j)] => {
+                neighbours[*a as usize].as_mut()[*i as usize] = Some(CellId(*b));
+                neighbours[*b as usize].as_mut()[*j as usize] = Some(CellId(*a));
+            }
+            _ => return Err(BuildError::NonManifold(run[2].1 as usize)),
+        }
+    }
+    Ok(neighbours)
 }
 
 fn check_edge_length(l: f64, extent: f64) -> Result<(), BuildError> {
@@ -523,6 +529,23 @@ mod tests {
         let vol: f64 = c.cell_ids().map(|x| c.measure(x)).sum();
         assert!((vol - 8000.0).abs() < 1e-6);
         assert!(c.validate().is_empty());
+    }
+
+    #[test]
+    fn a_facet_of_three_cells_is_rejected() {
+        let points = vec![
+            Vector2::new(0.0, 0.0),
+            Vector2::new(1.0, 0.0),
+            Vector2::new(0.5, 1.0),
+            Vector2::new(0.5, -1.0),
+            Vector2::new(0.5, 2.0),
+        ];
+        let cells = [[0, 1, 2], [0, 1, 3], [0, 1, 4]]
+            .map(|c| c.map(VertexId))
+            .to_vec();
+        let domain = (Vector2::new(0.0, -1.0), Vector2::new(1.0, 2.0));
+        let built = Complex::<D2>::from_arrays(points, cells, vec![0; 3], domain);
+        assert!(matches!(built, Err(BuildError::NonManifold(_))));
     }
 
     #[test]
