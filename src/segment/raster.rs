@@ -276,9 +276,9 @@ impl Raster for D2 {
     /// `edge_x`'s, so the result is bit-identical to testing the three
     /// edges on every row.
     ///
-    /// Corners of ordinary size take [`sorted_spans`] (no per-row tests,
+    /// Corners of ordinary size take `sorted_spans` (no per-row tests,
     /// no float-to-integer conversions); others the same rule with every
-    /// test in place ([`general_spans`]). Both give the same runs where both
+    /// test in place (`general_spans`). Both give the same runs where both
     /// apply (`fast_path_equals_the_general_path`); the bound on `w` and `h`
     /// keeps `ceil_small`'s range.
     fn cell_spans(image: &ImageView<'_>, c: &[Vector2<f64>], visit: &mut impl FnMut(usize, usize)) {
