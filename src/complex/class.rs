@@ -179,16 +179,36 @@ impl<K: Dim> Complex<K> {
     /// Recomputes the class of every live vertex of the given cells.
     /// Each vertex once, however many of the cells hold it (a class depends
     /// only on the labels and positions, not on the order of the updates).
+    /// Small batches (every flip and collapse) are listed on the stack.
     pub(crate) fn reclassify_cells(&mut self, cells: &[CellId]) {
-        let mut vertices: Vec<VertexId> = cells
+        let corners = cells
             .iter()
             .filter(|&&c| self.is_alive(c))
-            .flat_map(|&c| self.cells[c.index()].as_ref().iter().copied())
-            .collect();
+            .flat_map(|&c| self.cells[c.index()].as_ref().iter().copied());
+        const ON_STACK: usize = 64;
+        if cells.len() * K::NV <= ON_STACK {
+            let mut list = [VertexId(0); ON_STACK];
+            let mut n = 0;
+            for v in corners {
+                list[n] = v;
+                n += 1;
+            }
+            self.reclassify_vertices(&mut list[..n]);
+        } else {
+            let mut list: Vec<VertexId> = corners.collect();
+            self.reclassify_vertices(&mut list);
+        }
+    }
+
+    /// Recomputes the class of each listed vertex once (sorts the list).
+    fn reclassify_vertices(&mut self, vertices: &mut [VertexId]) {
         vertices.sort_unstable();
-        vertices.dedup();
-        for v in vertices {
-            self.classes[v.index()] = self.compute_class(v);
+        let mut last = None;
+        for &v in vertices.iter() {
+            if last != Some(v) {
+                self.classes[v.index()] = self.compute_class(v);
+                last = Some(v);
+            }
         }
     }
 }

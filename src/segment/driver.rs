@@ -130,6 +130,8 @@ pub struct Segmentation<'a, K: Raster> {
     /// Per-vertex displacement of the iteration, and a smoothing operator's output.
     displacement: Vec<K::Point>,
     applied: Vec<K::Point>,
+    /// Scratch: each force term's kind in this iteration.
+    term_kinds: Vec<TermKind>,
     dest: Destinations<K>,
     nu: f64,
     range: (f64, f64),
@@ -262,6 +264,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             external: Vec::new(),
             displacement: Vec::new(),
             applied: Vec::new(),
+            term_kinds: Vec::new(),
             dest,
             nu: 0.0,
             range,
@@ -501,7 +504,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.external.clear();
         self.external.resize(nv, K::Point::zero());
         let mut reference: Option<f64> = None;
-        let mut kinds = Vec::with_capacity(self.models.forces.len());
+        let mut kinds = std::mem::take(&mut self.term_kinds);
+        kinds.clear();
         for (term, buf) in self.models.forces.iter_mut().zip(&mut self.buffers) {
             buf.clear();
             buf.resize(nv, K::Point::zero());
@@ -532,6 +536,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.displacement
             .extend(self.external.iter().map(|&f| f * scale));
         self.add_smoothing(&kinds, scale, l);
+        self.term_kinds = kinds;
         self.dest.clear();
         let mut max_disp: f64 = 0.0;
         for (i, &d) in self.displacement.iter().enumerate() {
