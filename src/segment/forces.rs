@@ -43,7 +43,6 @@ pub enum ForceKind {
 
 #[derive(Clone, Copy, Debug)]
 struct Acc<P> {
-    kind: ForceKind,
     np: usize,
     phases: [Label; MAXP],
     /// Summed outward normals of each phase (junctions).
@@ -59,9 +58,8 @@ struct Acc<P> {
 impl<P: Point> Acc<P> {
     /// Empties the accumulator. The per-slot arrays are only read below
     /// `np` and are zeroed when a slot opens, so they are left as they are
-    /// (every vertex is reset every iteration).
+    /// (every interface vertex is reset every iteration).
     fn reset(&mut self) {
-        self.kind = ForceKind::Off;
         self.np = 0;
         self.ext = P::zero();
         self.share = 0.0;
@@ -230,7 +228,6 @@ impl<K: Raster> ForceField<K> {
     ) {
         let nv = complex.vertex_capacity();
         let empty = Acc {
-            kind: ForceKind::Off,
             np: 0,
             phases: [0; MAXP],
             normal: [K::Point::zero(); MAXP],
@@ -262,7 +259,6 @@ impl<K: Raster> ForceField<K> {
                 continue;
             }
             self.acc[i].reset();
-            self.acc[i].kind = kind;
             match kind {
                 ForceKind::TripleJunction => {
                     self.junctions.0 += 1;
@@ -314,7 +310,7 @@ impl<K: Raster> ForceField<K> {
             // outward normals per phase at junctions
             for corner in corners.iter().take(nf) {
                 let acc = &mut self.acc[corner.index()];
-                if acc.kind == ForceKind::TripleJunction {
+                if self.kinds[corner.index()] == ForceKind::TripleJunction {
                     if let Some(sa) = acc.slot(a) {
                         acc.normal[sa] += normal * meas;
                     }
@@ -330,7 +326,7 @@ impl<K: Raster> ForceField<K> {
             if gap.abs() < s.equal_means {
                 continue; // equal means: eq. (6) undefined, no region force
             }
-            let acc = &mut self.acc;
+            let (acc, kinds) = (&mut self.acc, &self.kinds);
             K::facet_samples(&cpts[..nf], s.spacing, &mut |p, w, ds| {
                 let intensity = K::sample(image, p);
                 let f = match s.model {
@@ -340,7 +336,7 @@ impl<K: Raster> ForceField<K> {
                 for k in 0..nf {
                     let wk = w[k] * ds;
                     let ac = &mut acc[corners[k].index()];
-                    match ac.kind {
+                    match kinds[corners[k].index()] {
                         ForceKind::Interface => {
                             ac.ext += normal * (f * wk);
                             ac.share += wk;
@@ -385,12 +381,10 @@ impl<K: Raster> ForceField<K> {
         self.bending = bending;
 
         for i in 0..nv {
-            if self.kinds[i] == ForceKind::Off {
-                continue;
-            }
             let acc = &self.acc[i];
             let mut f = K::Point::zero();
-            match acc.kind {
+            // (Off first: the other vertices' accumulators are stale)
+            match self.kinds[i] {
                 ForceKind::Off => continue,
                 ForceKind::Interface if acc.share > 0.0 => f += acc.ext * (1.0 / acc.share),
                 ForceKind::TripleJunction

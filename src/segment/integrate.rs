@@ -233,16 +233,7 @@ fn same_corners<K: Dim>(a: &[K::Point; 4], b: &[K::Point; 4]) -> bool {
 pub fn cell_stats<K: Raster>(image: &ImageView<'_>, corners: &[K::Point]) -> CellStats {
     let (mut sum, mut sum_sq, mut count) = (0.0f64, 0.0f64, 0usize);
     K::cell_spans(image, corners, &mut |a, b| {
-        // The running sums are copied into locals for the span: the
-        // closure holds them by reference, and summing through it kept
-        // them in memory, a store and a reload on every pixel.
-        let (mut s, mut s2) = (sum, sum_sq);
-        for &v in &image.data[a..b] {
-            let v = v as f64;
-            s += v;
-            s2 += v * v;
-        }
-        (sum, sum_sq) = (s, s2);
+        (sum, sum_sq) = accumulate((sum, sum_sq), &image.data[a..b]);
         count += b - a;
     });
     CellStats {
@@ -250,6 +241,19 @@ pub fn cell_stats<K: Raster>(image: &ImageView<'_>, corners: &[K::Point]) -> Cel
         sum_sq,
         count: count as u32,
     }
+}
+
+/// Adds `values`, in order, to a running sum and sum of squares. The sums
+/// are passed by value: kept in registers for the loop (a closure holding
+/// them by reference stored and reloaded them on every pixel).
+#[inline(always)]
+fn accumulate((mut sum, mut sum_sq): (f64, f64), values: &[f32]) -> (f64, f64) {
+    for &v in values {
+        let v = v as f64;
+        sum += v;
+        sum_sq += v * v;
+    }
+    (sum, sum_sq)
 }
 
 /// Pixels of one cell [`cell_stats_pair`] gathers; larger cells are summed in place.
@@ -292,16 +296,8 @@ pub fn cell_stats_pair<K: Raster>(
         sb += y;
         qb += y * y;
     }
-    for &x in &pa[n..] {
-        let x = x as f64;
-        sa += x;
-        qa += x * x;
-    }
-    for &y in &pb[n..] {
-        let y = y as f64;
-        sb += y;
-        qb += y * y;
-    }
+    let (sa, qa) = accumulate((sa, qa), &pa[n..]);
+    let (sb, qb) = accumulate((sb, qb), &pb[n..]);
     [(sa, qa, na), (sb, qb, nb)].map(|(sum, sum_sq, count)| CellStats {
         sum,
         sum_sq,
@@ -413,14 +409,19 @@ mod tests {
     use crate::dsc::{Destinations, DscParams};
     use nalgebra::Vector2;
 
+    /// A `w`×`h` image of scrambled values in `[0, 1)`.
+    fn scrambled(w: usize, h: usize, step: usize, modulus: usize) -> Vec<f32> {
+        (0..w * h)
+            .map(|i| ((i * step % modulus) as f32) / modulus as f32)
+            .collect()
+    }
+
     /// Two cells summed together give, bit for bit, what each gives alone:
     /// cells of unequal sizes, empty ones, and ones too large to gather.
     #[test]
     fn pairs_sum_like_single_cells() {
         let (w, h) = (90usize, 70usize);
-        let data: Vec<f32> = (0..w * h)
-            .map(|i| ((i * 7919 % 1013) as f32) / 1013.0)
-            .collect();
+        let data = scrambled(w, h, 7919, 1013);
         let image = ImageView::new_2d(w, h, &data).unwrap();
         let mut scratch = PairScratch::default();
         let mut state = 0x2545f4914f6cdd1du64;
@@ -452,9 +453,7 @@ mod tests {
     #[test]
     fn large_batches_give_the_same_statistics_in_parallel() {
         let (w, h) = (400usize, 300usize);
-        let data: Vec<f32> = (0..w * h)
-            .map(|i| ((i * 31 % 997) as f32) / 997.0)
-            .collect();
+        let data = scrambled(w, h, 31, 997);
         let image = ImageView::new_2d(w, h, &data).unwrap();
         let mesh = Complex::<D2>::rectangle(w as f64, h as f64, 1.5).unwrap();
         assert!(mesh.cell_count() >= 8 * PARALLEL_BATCH);
@@ -468,9 +467,7 @@ mod tests {
     #[test]
     fn cached_integration_equals_full_integration() {
         let (w, h) = (96usize, 80usize);
-        let data: Vec<f32> = (0..w * h)
-            .map(|i| ((i * 7919 % 1013) as f32) / 1013.0)
-            .collect();
+        let data = scrambled(w, h, 7919, 1013);
         let image = ImageView::new_2d(w, h, &data).unwrap();
         let l = 6.0;
         let mut mesh = Complex::<D2>::rectangle(w as f64, h as f64, l).unwrap();
