@@ -11,6 +11,7 @@ use crate::complex::{Complex, VertexId};
 use crate::dim::Point;
 use crate::dsc::{Destinations, DscParams};
 use serde::Serialize;
+use spin_join::SpinHelper;
 use std::time::Instant;
 
 /// Largest stable coefficient of the explicit bending step (see [`Segmentation::step`]).
@@ -120,6 +121,8 @@ pub struct Segmentation<'a, K: Raster> {
     cells: Vec<CellStats>,
     /// Keeps the statistics of cells that did not move between iterations.
     cell_cache: CellCache<K>,
+    /// The second thread of the short parallel sections of an iteration.
+    helper: SpinHelper,
     phases: PhaseStats,
     forces: ForceField<K>,
     models: Models<K>,
@@ -220,7 +223,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         // Through the cache: the initialisation relabels cells but rarely
         // moves them, so the first step finds them integrated already.
         let mut cell_cache = CellCache::new();
-        cell_cache.integrate(&complex, &image, &mut cells);
+        let helper = SpinHelper::new();
+        cell_cache.integrate_on(&helper, &complex, &image, &mut cells);
         let mut hints = if given {
             vec![None; params.phases]
         } else {
@@ -257,6 +261,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             complex,
             cells,
             cell_cache,
+            helper,
             phases,
             forces: ForceField::new(),
             models,
@@ -381,7 +386,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     fn integrate(&mut self) {
         let t = Instant::now();
         self.cell_cache
-            .integrate(&self.complex, &self.image, &mut self.cells);
+            .integrate_on(&self.helper, &self.complex, &self.image, &mut self.cells);
         self.phases.update(&self.complex, &self.cells);
         self.times.integrate += t.elapsed().as_secs_f64();
     }

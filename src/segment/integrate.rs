@@ -6,6 +6,7 @@ use crate::complex::{CellId, Complex, Label};
 use crate::dim::Dim;
 use rayon::prelude::*;
 use serde::Serialize;
+use spin_join::SpinHelper;
 
 /// Sum, sum of squares and number of the pixels whose centre lies in a cell.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -67,16 +68,32 @@ type CachedCorners<K> = Option<[<K as Dim>::Point; 4]>;
 pub struct CellCache<K: Dim> {
     /// Corners at the last integration, per cell id.
     corners: Vec<CachedCorners<K>>,
+    /// The previous call's corners and statistics, read while the current
+    /// ones are written (double buffering: one pass both carries the cache
+    /// across a compaction and finds the changed cells).
+    old_corners: Vec<CachedCorners<K>>,
+    old_stats: Vec<CellStats>,
+    /// Scratch: for each cell id, its id at the previous call.
+    previous_id: Vec<u32>,
     /// The image the cache was filled from (address and length).
     image: (usize, usize),
     /// [`Complex::compactions`] at the last call.
     generation: u64,
-    /// Scratch: the cells to integrate, with their ordering key.
+    /// Scratch of the two halves of a call (see [`SpinHelper`]).
+    halves: [Refresh; 2],
+}
+
+/// Scratch of one range of cells: the changed ones with their ordering
+/// key, their statistics, a pair buffer.
+#[derive(Clone, Debug, Default)]
+struct Refresh {
     changed: Vec<(u64, CellId)>,
-    /// Scratch: their statistics, in that order.
     fresh: Vec<CellStats>,
     scratch: PairScratch,
 }
+
+/// Marks a cell id without an entry at the previous call.
+const NO_ENTRY: u32 = u32::MAX;
 
 impl<K: Raster> Default for CellCache<K> {
     fn default() -> Self {
@@ -89,11 +106,12 @@ impl<K: Raster> CellCache<K> {
     pub fn new() -> Self {
         CellCache {
             corners: Vec::new(),
+            old_corners: Vec::new(),
+            old_stats: Vec::new(),
+            previous_id: Vec::new(),
             image: (0, 0),
             generation: 0,
-            changed: Vec::new(),
-            fresh: Vec::new(),
-            scratch: PairScratch::default(),
+            halves: Default::default(),
         }
     }
 
@@ -108,104 +126,167 @@ impl<K: Raster> CellCache<K> {
         image: &ImageView<'_>,
         out: &mut Vec<CellStats>,
     ) -> usize {
-        let key = (image.data.as_ptr() as usize, image.data.len());
+        self.integrate_on(&SpinHelper::none(), complex, image, out)
+    }
+
+    /// [`integrate`](Self::integrate), sharing the work with `helper`'s
+    /// thread (the same statistics, bit for bit).
+    pub fn integrate_on(
+        &mut self,
+        helper: &SpinHelper,
+        complex: &Complex<K>,
+        image: &ImageView<'_>,
+        out: &mut Vec<CellStats>,
+    ) -> usize {
+        std::mem::swap(&mut self.corners, &mut self.old_corners);
+        std::mem::swap(out, &mut self.old_stats);
+        self.map_previous_ids(complex, image);
         let cap = complex.cell_capacity();
+        // Every entry is written by the scan below: no need to clear.
+        out.resize(cap, CellStats::default());
+        self.corners.resize(cap, None);
+        let old = Previous::<K> {
+            corners: &self.old_corners,
+            stats: &self.old_stats,
+            id: &self.previous_id,
+        };
+        if cap >= 8 * PARALLEL_BATCH {
+            // Large (3D, first integrations of large images): rayon's
+            // threads, block by block.
+            let blocks = out.par_chunks_mut(PARALLEL_BATCH);
+            let corners = self.corners.par_chunks_mut(PARALLEL_BATCH);
+            return blocks
+                .zip(corners)
+                .enumerate()
+                .map_init(Refresh::default, |r, (b, (stats, corners))| {
+                    let first = b * PARALLEL_BATCH;
+                    r.scan(complex, &old, first, corners, stats);
+                    r.integrate::<K>(image, corners, first);
+                    r.store(stats, first)
+                })
+                .sum();
+        }
+        // Two threads: each scans half of the ids, then each integrates half
+        // of all the changed cells (they gather unevenly: new cells have
+        // high ids).
+        let mid = cap / 2;
+        let (stats_lo, stats_hi) = out.split_at_mut(mid);
+        let (corners_lo, corners_hi) = self.corners.split_at_mut(mid);
+        let [lo, hi] = &mut self.halves;
+        helper.join(
+            || lo.scan(complex, &old, 0, corners_lo, stats_lo),
+            || hi.scan(complex, &old, mid, corners_hi, stats_hi),
+        );
+        lo.changed.append(&mut hi.changed);
+        let split = lo.changed.len() / 4 * 2;
+        hi.changed.extend_from_slice(&lo.changed[split..]);
+        lo.changed.truncate(split);
+        let corners = &self.corners;
+        helper.join(
+            || lo.integrate::<K>(image, corners, 0),
+            || hi.integrate::<K>(image, corners, 0),
+        );
+        lo.store(out, 0) + hi.store(out, 0)
+    }
+
+    /// Fills `previous_id`: each current cell id's id at the last call
+    /// (through the compaction since, if any), or [`NO_ENTRY`]. Forgets the
+    /// last call if the image changed or the complex went through anything
+    /// but at most one compaction.
+    fn map_previous_ids(&mut self, complex: &Complex<K>, image: &ImageView<'_>) {
+        let key = (image.data.as_ptr() as usize, image.data.len());
         let generation = complex.compactions();
+        let known = self.old_corners.len();
+        self.previous_id.clear();
+        self.previous_id.resize(complex.cell_capacity(), NO_ENTRY);
         if key != self.image
-            || out.len() != self.corners.len()
+            || self.old_stats.len() != known
             || generation < self.generation
             || generation > self.generation + 1
         {
-            self.corners.clear();
-            out.clear();
             self.image = key;
         } else if generation == self.generation + 1 {
-            // One compaction since the last call: carry every cached cell to
-            // its new id (whatever it holds there is checked below anyway).
-            // Compaction keeps the order, so new ids never exceed old ones
-            // and the entries move forward in place.
-            let map = complex.last_cell_map();
-            let mut kept = 0;
-            for (old, new) in map.iter().enumerate().take(self.corners.len()) {
+            for (old, new) in complex.last_cell_map().iter().enumerate().take(known) {
                 if let Some(new) = new {
-                    self.corners[new.index()] = self.corners[old];
-                    out[new.index()] = out[old];
-                    kept = new.index() + 1;
+                    self.previous_id[new.index()] = old as u32;
                 }
             }
-            self.corners.truncate(kept);
-            out.truncate(kept);
+        } else {
+            let n = known.min(self.previous_id.len());
+            for (i, p) in self.previous_id[..n].iter_mut().enumerate() {
+                *p = i as u32;
+            }
         }
         self.generation = generation;
-        out.resize(cap, CellStats::default());
-        self.corners.resize(cap, None);
-        self.find_changed(complex, out);
-        self.integrate_changed(image, out);
-        self.changed.len()
-    }
-
-    /// Lists the live cells whose corners changed (recording their new
-    /// corners) with their [`spatial_key`]; zeroes the statistics of dead
-    /// cells. In parallel only for a large complex (see [`PARALLEL_BATCH`]).
-    fn find_changed(&mut self, complex: &Complex<K>, out: &mut [CellStats]) {
-        self.changed.clear();
-        let check = |(i, (s, k)): (usize, (&mut CellStats, &mut CachedCorners<K>))| {
-            let c = CellId(i as u32);
-            if !complex.is_alive(c) {
-                *s = CellStats::default();
-                *k = None;
-                return None;
-            }
-            let pts = complex.cell_points(c);
-            if k.is_some_and(|old| same_corners::<K>(&old, &pts)) {
-                return None;
-            }
-            *k = Some(pts);
-            Some((spatial_key::<K>(&pts), c))
-        };
-        if out.len() >= 8 * PARALLEL_BATCH {
-            let cells = out.par_iter_mut().zip(self.corners.par_iter_mut());
-            self.changed.par_extend(cells.enumerate().filter_map(check));
-        } else {
-            let cells = out.iter_mut().zip(self.corners.iter_mut());
-            self.changed.extend(cells.enumerate().filter_map(check));
-        }
-    }
-
-    /// Integrates the changed cells in image order and stores their
-    /// statistics. Each cell's sums are its own, so the order changes no
-    /// bit; image order makes neighbouring cells share the image rows they
-    /// read, which id order (new cells are scattered along the interface)
-    /// fetched again from memory for every cell. Threads only pay for a
-    /// large batch: waking them costs more than the few thousand cells of
-    /// a typical step (measured, 2 cores).
-    fn integrate_changed(&mut self, image: &ImageView<'_>, out: &mut [CellStats]) {
-        self.changed.sort_unstable_by_key(|&(key, _)| key);
-        self.fresh.clear();
-        self.fresh.resize(self.changed.len(), CellStats::default());
-        let corners = &self.corners;
-        let fill = |scratch: &mut PairScratch,
-                    (stats, ids): (&mut [CellStats], &[(u64, CellId)])| {
-            let pair = [0, 1].map(|j| ids.get(j).and_then(|&(_, c)| corners[c.index()]));
-            fill_pair::<K>(image, stats, pair, scratch);
-        };
-        if self.changed.len() >= PARALLEL_BATCH {
-            self.fresh
-                .par_chunks_mut(2)
-                .zip(self.changed.par_chunks(2))
-                .for_each_init(PairScratch::default, fill);
-        } else {
-            for chunk in self.fresh.chunks_mut(2).zip(self.changed.chunks(2)) {
-                fill(&mut self.scratch, chunk);
-            }
-        }
-        for (&(_, c), &st) in self.changed.iter().zip(&self.fresh) {
-            out[c.index()] = st;
-        }
     }
 }
 
-/// Cells to integrate from which threads pay off.
+/// The cache's entries at the previous call, and where each cell was then.
+struct Previous<'a, K: Dim> {
+    corners: &'a [CachedCorners<K>],
+    stats: &'a [CellStats],
+    id: &'a [u32],
+}
+
+impl Refresh {
+    /// Carries the previous statistics of the cells `first..first +
+    /// stats.len()` whose corners did not change and lists the others,
+    /// in image order (any order gives the same sums; image order makes
+    /// neighbouring cells share the rows they read).
+    fn scan<K: Raster>(
+        &mut self,
+        complex: &Complex<K>,
+        old: &Previous<'_, K>,
+        first: usize,
+        corners: &mut [CachedCorners<K>],
+        stats: &mut [CellStats],
+    ) {
+        self.changed.clear();
+        for (j, (k, s)) in corners.iter_mut().zip(stats.iter_mut()).enumerate() {
+            let c = CellId((first + j) as u32);
+            if !complex.is_alive(c) {
+                (*k, *s) = (None, CellStats::default());
+                continue;
+            }
+            let pts = complex.cell_points(c);
+            *k = Some(pts);
+            let was = old.id[c.index()] as usize;
+            match old.corners.get(was) {
+                Some(Some(before)) if same_corners::<K>(before, &pts) => *s = old.stats[was],
+                // (integrated later)
+                _ => self.changed.push((spatial_key::<K>(&pts), c)),
+            }
+        }
+        self.changed.sort_unstable_by_key(|&(key, _)| key);
+    }
+
+    /// Integrates the listed cells; `corners` holds the entry of cell
+    /// `first + i` at `i`.
+    fn integrate<K: Raster>(
+        &mut self,
+        image: &ImageView<'_>,
+        corners: &[CachedCorners<K>],
+        first: usize,
+    ) {
+        self.fresh.clear();
+        self.fresh.resize(self.changed.len(), CellStats::default());
+        for (out, ids) in self.fresh.chunks_mut(2).zip(self.changed.chunks(2)) {
+            let pair = [0, 1].map(|j| ids.get(j).and_then(|&(_, c)| corners[c.index() - first]));
+            fill_pair::<K>(image, out, pair, &mut self.scratch);
+        }
+    }
+
+    /// Stores the integrated statistics (cell `first + i` at `i`); returns
+    /// how many.
+    fn store(&self, stats: &mut [CellStats], first: usize) -> usize {
+        for (&(_, c), &st) in self.changed.iter().zip(&self.fresh) {
+            stats[c.index() - first] = st;
+        }
+        self.changed.len()
+    }
+}
+
+/// Cells per block of rayon's share of a large integration.
 const PARALLEL_BATCH: usize = 8192;
 
 /// Orders cells by the position of their first corner along the last two
@@ -472,14 +553,23 @@ mod tests {
         let l = 6.0;
         let mut mesh = Complex::<D2>::rectangle(w as f64, h as f64, l).unwrap();
         let params = DscParams::new::<D2>(l);
-        let mut cache = CellCache::<D2>::new();
-        let mut cached = Vec::new();
+        // Both ways: on one thread, and shared with a helper thread.
+        let mut caches = [CellCache::<D2>::new(), CellCache::<D2>::new()];
+        let helpers = [SpinHelper::none(), SpinHelper::new()];
+        let mut integrate = |mesh: &Complex<D2>, cached: &mut [Vec<CellStats>; 2]| {
+            let [a, b] = cached;
+            let n = caches[0].integrate_on(&helpers[0], mesh, &image, a);
+            assert_eq!(caches[1].integrate_on(&helpers[1], mesh, &image, b), n);
+            assert_eq!(a, b);
+            n
+        };
+        let mut cached = [Vec::new(), Vec::new()];
         let mut full = Vec::new();
-        let first = cache.integrate(&mesh, &image, &mut cached);
+        let first = integrate(&mesh, &mut cached);
         integrate_cells(&mesh, &image, &mut full);
-        assert_eq!(cached, full);
+        assert_eq!(cached[0], full);
         assert_eq!(first, mesh.cell_count());
-        assert_eq!(cache.integrate(&mesh, &image, &mut cached), 0);
+        assert_eq!(integrate(&mesh, &mut cached), 0);
         for round in 0..4 {
             let mut dest = Destinations::new(&mesh);
             let centre = Vector2::new(w as f64 / 2.0, h as f64 / 2.0);
@@ -491,9 +581,9 @@ mod tests {
                 }
             }
             mesh.deform(&dest, &params);
-            let n = cache.integrate(&mesh, &image, &mut cached);
+            let n = integrate(&mesh, &mut cached);
             integrate_cells(&mesh, &image, &mut full);
-            assert_eq!(cached, full, "round {round}");
+            assert_eq!(cached[0], full, "round {round}");
             assert!(n > 0 && n < mesh.cell_count(), "round {round}: {n}");
         }
     }
