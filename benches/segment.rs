@@ -9,6 +9,7 @@ use dsc_seg::dim::D2;
 use dsc_seg::phantom::shapes2d;
 use dsc_seg::segment::integrate::{integrate_cells, CellCache};
 use dsc_seg::segment::{default_edge_length, ImageView, SegmentParams, Segmentation};
+use spin_join::SpinHelper;
 use std::hint::black_box;
 
 fn statistics(c: &mut Criterion) {
@@ -91,6 +92,18 @@ fn one_iteration_cached(
             || (cache.clone(), cells.clone()),
             |(mut cache, mut cells)| {
                 cache.integrate(after, image, &mut cells);
+                (cache, cells)
+            },
+            BatchSize::LargeInput,
+        )
+    });
+    // As the driver does it: shared with the hot helper thread.
+    let helper = SpinHelper::new();
+    group.bench_function("one_iteration_on_helper", |b| {
+        b.iter_batched(
+            || (cache.clone(), cells.clone()),
+            |(mut cache, mut cells)| {
+                cache.integrate_on(&helper, after, image, &mut cells);
                 (cache, cells)
             },
             BatchSize::LargeInput,
