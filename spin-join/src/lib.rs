@@ -181,17 +181,6 @@ impl std::fmt::Debug for SpinHelper {
     }
 }
 
-impl Clone for SpinHelper {
-    /// A new helper of the same kind (threads are not shared).
-    fn clone(&self) -> Self {
-        if self.is_threaded() {
-            Self::spawn().unwrap_or_else(|_| Self::none())
-        } else {
-            Self::none()
-        }
-    }
-}
-
 impl Worker {
     /// Publishes `job` and wakes the helper if it parked; returns the job's
     /// sequence number.

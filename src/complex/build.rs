@@ -126,7 +126,9 @@ impl<K: Dim> Complex<K> {
             last_cell_map: Vec::new(),
             last_vertex_map: Vec::new(),
             moved_at: vec![0; n_points],
+            star_changed_at: vec![0; n_points],
             move_clock: 0,
+            star_scratch: Vec::new(),
         };
         complex.reclassify_all();
         Ok(complex)

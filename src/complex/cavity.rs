@@ -91,6 +91,7 @@ impl<K: Dim> Complex<K> {
         self.positions.push(p);
         self.move_clock += 1;
         self.moved_at.push(self.move_clock);
+        self.star_changed_at.push(self.move_clock);
         self.vertex_cell.push(None);
         self.classes.push(super::VertexClass {
             kind: super::VertexKind::Interior,
@@ -207,8 +208,10 @@ impl<K: Dim> Complex<K> {
             return Err(Rejection::NonManifold);
         }
         // Commit.
+        self.move_clock += 1;
         for &c in old {
             self.alive[c.index()] = false;
+            self.mark_star_changed(c);
         }
         self.live_cells -= old.len();
         for &(j, i, pos) in &external {
@@ -237,6 +240,7 @@ impl<K: Dim> Complex<K> {
             self.neighbours.push(links[j]);
             self.labels.push(*label);
             self.alive.push(true);
+            self.mark_star_changed(id);
             created.push(id);
             for &v in cell.as_ref() {
                 if self.vertex_cell[v.index()].is_none() {

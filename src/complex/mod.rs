@@ -48,8 +48,13 @@ pub struct Complex<K: Dim> {
     last_vertex_map: Vec<Option<VertexId>>,
     /// Per vertex: the value of `move_clock` when it was created or last moved.
     moved_at: Vec<u64>,
-    /// Counts vertex moves and creations.
+    /// Per vertex: the value of `move_clock` when its star last changed (a
+    /// corner of it moved, a cell of it was created or removed).
+    star_changed_at: Vec<u64>,
+    /// Counts vertex moves and creations and cell replacements.
     move_clock: u64,
+    /// Scratch of [`Complex::set_position`].
+    star_scratch: Vec<CellId>,
 }
 
 /// A triangle complex.
@@ -303,13 +308,40 @@ impl<K: Dim> Complex<K> {
         self.positions[v.index()] = p;
         self.move_clock += 1;
         self.moved_at[v.index()] = self.move_clock;
+        // Every vertex sharing a cell with `v` has a changed star.
+        let mut star = std::mem::take(&mut self.star_scratch);
+        self.star_into(v, &mut star);
+        for &c in &star {
+            self.mark_star_changed(c);
+        }
+        self.star_scratch = star;
     }
 
-    /// A counter that advances with every vertex move or creation: a result
-    /// computed from positions at clock `t` still holds for the vertices whose
-    /// [`moved_at`](Self::moved_at) is at most `t`.
+    /// Records that the stars of `c`'s corners changed now.
+    #[inline]
+    pub(crate) fn mark_star_changed(&mut self, c: CellId) {
+        let clock = self.move_clock;
+        for k in 0..K::NV {
+            let w = self.cells[c.index()].as_ref()[k];
+            self.star_changed_at[w.index()] = clock;
+        }
+    }
+
+    /// A counter that advances with every vertex move or creation and every
+    /// replacement of cells: a result computed from positions at clock `t`
+    /// still holds for the vertices whose [`moved_at`](Self::moved_at) is at
+    /// most `t`, and one computed from a vertex's star for the vertices
+    /// whose [`star_changed_at`](Self::star_changed_at) is.
     pub fn move_clock(&self) -> u64 {
         self.move_clock
+    }
+
+    /// The [`move_clock`](Self::move_clock) when the star of `v` last
+    /// changed: `v` or a vertex sharing a cell with it moved, or a cell
+    /// around `v` was created or removed.
+    #[inline]
+    pub fn star_changed_at(&self, v: VertexId) -> u64 {
+        self.star_changed_at[v.index()]
     }
 
     /// The [`move_clock`](Self::move_clock) when `v` was created or last moved.
@@ -364,12 +396,14 @@ impl<K: Dim> Complex<K> {
                 let k = new.index();
                 self.positions[k] = self.positions[i];
                 self.moved_at[k] = self.moved_at[i];
+                self.star_changed_at[k] = self.star_changed_at[i];
                 self.classes[k] = self.classes[i];
                 self.vertex_cell[k] = self.vertex_cell[i].and_then(|c| cmap[c.index()]);
             }
         }
         self.positions.truncate(n as usize);
         self.moved_at.truncate(n as usize);
+        self.star_changed_at.truncate(n as usize);
         self.classes.truncate(n as usize);
         self.vertex_cell.truncate(n as usize);
         for (i, new) in cmap.iter().enumerate() {

@@ -8,8 +8,11 @@
 //! and every vertex move or creation advances the complex's move clock
 //! ([`Complex::moved_at`]). An answer computed from some cells and vertices
 //! at clock `t` holds while those cells are alive and none of those vertices
-//! has moved since `t`. Valid until the complex is compacted (the ids
-//! change), so one memo serves one `deform` call.
+//! has moved since `t`. Smoothing's verdict on a vertex depends on its star
+//! alone, so it is checked against [`Complex::star_changed_at`], which the
+//! complex advances for every vertex around a move or a cell replacement:
+//! no walk of the star is needed to skip it. Valid until the complex is
+//! compacted (the ids change), so one memo serves one `deform` call.
 
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::{Dim, D2};
@@ -24,8 +27,8 @@ pub(crate) struct Stamp {
 /// The verdicts of smoothing and edge flips, per vertex and per cell id.
 #[derive(Clone, Debug, Default)]
 pub struct ImproveMemo {
-    /// Per vertex: when smoothing last left it in place.
-    kept: Vec<Option<Stamp>>,
+    /// Per vertex: the move clock when smoothing last left it in place.
+    kept: Vec<Option<u64>>,
     /// Per cell (2D): when all of its edges were last found not to flip.
     settled: Vec<Option<Stamp>>,
 }
@@ -38,22 +41,16 @@ impl ImproveMemo {
 
     /// Records that smoothing left `v` in place (`kept`) or moved it.
     pub(crate) fn set_kept<K: Dim>(&mut self, complex: &Complex<K>, v: VertexId, kept: bool) {
-        let stamp = kept.then(|| stamp_of(complex));
+        let stamp = kept.then(|| complex.move_clock());
         put(&mut self.kept, v.index(), stamp);
     }
 
-    /// Whether smoothing left `v` in place and its star (`star`, just
-    /// collected) has kept its cells and corners since.
-    pub(crate) fn still_kept<K: Dim>(
-        &self,
-        complex: &Complex<K>,
-        v: VertexId,
-        star: &[CellId],
-    ) -> bool {
-        let Some(stamp) = get(&self.kept, v.index()) else {
-            return false;
-        };
-        star.iter().all(|&c| unchanged_since(complex, c, stamp))
+    /// Whether smoothing left `v` in place and its star has not changed
+    /// since ([`Complex::star_changed_at`]): the same cells, the same
+    /// corner positions, so the same verdict. Needs no walk of the star.
+    #[inline]
+    pub(crate) fn still_kept<K: Dim>(&self, complex: &Complex<K>, v: VertexId) -> bool {
+        get(&self.kept, v.index()).is_some_and(|t| complex.star_changed_at(v) <= t)
     }
 
     /// Records that no edge of `c` flipped when tested against the cells
@@ -84,13 +81,6 @@ pub(crate) fn edge_settled(complex: &Complex<D2>, c: CellId, i: usize, stamp: St
     complex.neighbours(c)[i].is_none_or(|nb| unchanged_since(complex, nb, stamp))
 }
 
-fn stamp_of<K: Dim>(complex: &Complex<K>) -> Stamp {
-    Stamp {
-        clock: complex.move_clock(),
-        cells_below: complex.cell_capacity() as u32,
-    }
-}
-
 /// Whether cell `c` existed at the stamp and none of its corners moved since.
 #[inline]
 fn unchanged_since<K: Dim>(complex: &Complex<K>, c: CellId, stamp: Stamp) -> bool {
@@ -102,11 +92,11 @@ fn unchanged_since<K: Dim>(complex: &Complex<K>, c: CellId, stamp: Stamp) -> boo
 }
 
 #[inline]
-fn get(stamps: &[Option<Stamp>], i: usize) -> Option<Stamp> {
+fn get<T: Copy>(stamps: &[Option<T>], i: usize) -> Option<T> {
     stamps.get(i).copied().flatten()
 }
 
-fn put(stamps: &mut Vec<Option<Stamp>>, i: usize, stamp: Option<Stamp>) {
+fn put<T: Copy>(stamps: &mut Vec<Option<T>>, i: usize, stamp: Option<T>) {
     if i >= stamps.len() {
         stamps.resize(i + 1, None);
     }

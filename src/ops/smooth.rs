@@ -21,13 +21,10 @@ impl<K: Dim> Complex<K> {
         star: &mut Vec<CellId>,
         memo: &mut ImproveMemo,
     ) -> bool {
-        if !self.is_vertex_alive(v) || self.class(v).on_interface() {
+        if !self.is_vertex_alive(v) || self.class(v).on_interface() || memo.still_kept(self, v) {
             return false;
         }
         self.star_into(v, star);
-        if memo.still_kept(self, v, star) {
-            return false;
-        }
         let moved = self.smooth_star(v, star);
         memo.set_kept(self, v, !moved);
         moved

@@ -152,6 +152,8 @@ impl Flipper {
             };
             let target = match (candidate, guard) {
                 (Some(t), false) => Some(t),
+                // Nothing to consider (most cells: inside a phase, no candidate).
+                (None, true) if !has_other_neighbour(complex, c, own) => None,
                 (cand, true) => {
                     // the rule's candidate, or (guarded) the neighbour phase
                     // that lowers the energy most
@@ -282,6 +284,14 @@ impl Flipper {
         }
         self.changes.len()
     }
+}
+
+/// Whether a neighbour of `c` has a label other than `own`.
+fn has_other_neighbour<K: Raster>(cx: &Complex<K>, c: CellId, own: Label) -> bool {
+    cx.neighbours(c)
+        .iter()
+        .flatten()
+        .any(|&nb| cx.label(nb) != own)
 }
 
 /// Interface length/area that relabelling `c` from `own` to `new` adds
