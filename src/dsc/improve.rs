@@ -107,6 +107,9 @@ fn flip_sweeps(complex: &mut Complex<D2>, region: &mut Region, memo: &mut Improv
     for _sweep in 0..8 {
         let mut changed = 0;
         for &c in region.cells(complex) {
+            if complex.is_alive(c) && memo.quad_settled(complex, c) {
+                continue;
+            }
             let neighbours_below = complex.cell_capacity() as u32;
             let verdict = memo.settled_cell(complex, c);
             for i in 0..3 {

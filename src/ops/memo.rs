@@ -63,6 +63,21 @@ impl ImproveMemo {
         put(&mut self.settled, c.index(), Some(stamp));
     }
 
+    /// Whether no edge of `c` flipped when last tested and nothing around
+    /// has changed since: no corner of `c` has a changed star
+    /// ([`Complex::star_changed_at`]), so `c`, its neighbours and their
+    /// corners are as they were. Three loads instead of the per-edge test
+    /// of [`settled_cell`](Self::settled_cell) and [`edge_settled`].
+    #[inline]
+    pub(crate) fn quad_settled(&self, complex: &Complex<D2>, c: CellId) -> bool {
+        get(&self.settled, c.index()).is_some_and(|stamp| {
+            complex
+                .cell(c)
+                .iter()
+                .all(|&w| complex.star_changed_at(w) <= stamp.clock)
+        })
+    }
+
     /// The verdict on `c`'s edges if it still stands for `c` itself: `c` was
     /// settled and none of its corners has moved since. Each edge's verdict
     /// then also needs its neighbour unchanged ([`edge_settled`]).
