@@ -1,15 +1,15 @@
 //! The iteration driver: integrate, flip, compute forces, deform, check convergence.
 
 use super::error::SegmentError;
-use super::forces::{ForceField, ForceSettings};
+use super::force_stage::{ForceInputs, ForceStage};
+use super::forces::ForceField;
 use super::image::ImageView;
 use super::integrate::{CellCache, CellStats, PhaseStats};
-use super::model::{Flow, ForceContext, InitContext, LabelContext, Models, TermKind};
+use super::model::{Flow, InitContext, LabelContext, Models};
 use super::params::SegmentParams;
 use super::raster::Raster;
-use crate::complex::{Complex, VertexId};
-use crate::dim::Point;
-use crate::dsc::{Destinations, DscParams};
+use crate::complex::Complex;
+use crate::dsc::DscParams;
 use serde::Serialize;
 use spin_join::SpinHelper;
 use std::time::Instant;
@@ -124,18 +124,9 @@ pub struct Segmentation<'a, K: Raster> {
     /// The second thread of the short parallel sections of an iteration.
     helper: SpinHelper,
     phases: PhaseStats,
-    forces: ForceField<K>,
     models: Models<K>,
-    /// One force buffer per force term, indexed by vertex id.
-    buffers: Vec<Vec<K::Point>>,
-    /// Sum of the external terms.
-    external: Vec<K::Point>,
-    /// Per-vertex displacement of the iteration, and a smoothing operator's output.
-    displacement: Vec<K::Point>,
-    applied: Vec<K::Point>,
-    /// Scratch: each force term's kind in this iteration.
-    term_kinds: Vec<TermKind>,
-    dest: Destinations<K>,
+    /// The force stage's fields, buffers and destinations.
+    force: ForceStage<K>,
     nu: f64,
     range: (f64, f64),
     times: StageTimes,
@@ -253,7 +244,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         if phases.present() < 1 {
             return Err(SegmentError::Init("no phase covers any pixel".into()));
         }
-        let dest = Destinations::new(&complex);
+        let force = ForceStage::new(&complex);
         let mut s = Segmentation {
             image,
             params,
@@ -263,14 +254,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             cell_cache,
             helper,
             phases,
-            forces: ForceField::new(),
             models,
-            buffers: Vec::new(),
-            external: Vec::new(),
-            displacement: Vec::new(),
-            applied: Vec::new(),
-            term_kinds: Vec::new(),
-            dest,
+            force,
             nu: 0.0,
             range,
             times: StageTimes::default(),
@@ -350,7 +335,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// The paper's per-vertex fields (region force, bending, umbrella) from
     /// the last iteration.
     pub fn field(&self) -> &ForceField<K> {
-        &self.forces
+        &self.force.field
     }
 
     /// The current step fraction (the parameter, halved when the energy stalls).
@@ -426,8 +411,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let l = self.dsc.edge_length;
 
         let t = Instant::now();
-        if !self.dest.is_empty() {
-            self.complex.deform(&self.dest, &self.dsc);
+        if !self.force.dest.is_empty() {
+            self.complex.deform(&self.force.dest, &self.dsc);
             // Reused: cleared before it is filled (and grown by `set`).
         }
         self.times.deform += t.elapsed().as_secs_f64();
@@ -440,7 +425,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             flips,
             max_displacement: max_disp / l,
             means: self.phases.mean.clone(),
-            junctions: self.forces.junctions,
+            junctions: self.force.field.junctions,
         };
         // Under noise a fixed step never lets every vertex settle: once the
         // energy has not reached a new low for `STALL_ITERATIONS`, halve the
@@ -482,116 +467,18 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// destinations; returns the interface measure and the largest
     /// displacement (pixels).
     fn forces_and_destinations(&mut self, iteration: usize) -> (f64, f64) {
-        let l = self.dsc.edge_length;
-        let settings = ForceSettings {
-            model: self.params.force,
-            junction: self.params.junction_force,
-            spacing: self.params.sample_spacing,
-            equal_means: 1e-6 * (self.range.1 - self.range.0),
-        };
-        self.forces
-            .compute(&self.complex, &self.image, &self.phases, &settings);
-        let length = self.forces.interface_measure;
-        // Every term adds into its own buffer; external terms are summed.
-        let nv = self.complex.vertex_capacity();
-        let ctx = ForceContext {
+        let input = ForceInputs {
             complex: &self.complex,
             image: &self.image,
             phases: &self.phases,
             cells: &self.cells,
             params: &self.params,
-            field: &self.forces,
-            edge_length: l,
             range: self.range,
+            edge_length: self.dsc.edge_length,
+            step: self.step,
             iteration,
         };
-        self.buffers.resize_with(self.models.forces.len(), Vec::new);
-        self.external.clear();
-        self.external.resize(nv, K::Point::zero());
-        let mut reference: Option<f64> = None;
-        let mut kinds = std::mem::take(&mut self.term_kinds);
-        kinds.clear();
-        for (term, buf) in self.models.forces.iter_mut().zip(&mut self.buffers) {
-            buf.clear();
-            buf.resize(nv, K::Point::zero());
-            term.add_forces(&ctx, buf);
-            let kind = term.kind(ctx.params);
-            if kind == TermKind::External {
-                let r = term.reference_magnitude(&ctx);
-                reference = Some(reference.map_or(r, |x: f64| x.max(r)));
-                for (e, f) in self.external.iter_mut().zip(buf.iter()) {
-                    *e += *f;
-                }
-            }
-            kinds.push(kind);
-        }
-        // Step: the largest external displacement is `step`·L once a force
-        // reaches the reference magnitude (1 for eq. 6: a pixel exactly at a
-        // mean); weaker fields move proportionally less, so the evolution can
-        // settle. The internal terms are explicit smoothing steps of
-        // coefficient k = dt·β/L; for the bending term the highest-frequency
-        // mode changes by a factor 1 − 4k per step, so k ≤ 0.2 is stable (and
-        // k ≤ 0.5 for the umbrella of the elasticity). A larger k is split
-        // into ⌈k/0.2⌉ sub-steps (the terms are linear in the positions), so
-        // β weighs the same against the region force at every step size.
-        let fmax = self.external.iter().map(|f| f.length()).fold(0.0, f64::max);
-        let denom = fmax.max(reference.unwrap_or(1.0));
-        let scale = self.step * l / if denom > 0.0 { denom } else { 1.0 };
-        self.displacement.clear();
-        self.displacement
-            .extend(self.external.iter().map(|&f| f * scale));
-        self.add_smoothing(&kinds, scale, l);
-        self.term_kinds = kinds;
-        self.dest.clear();
-        let mut max_disp: f64 = 0.0;
-        for (i, &d) in self.displacement.iter().enumerate() {
-            let v = VertexId(i as u32);
-            if d == K::Point::zero() || !self.complex.is_vertex_alive(v) {
-                continue;
-            }
-            let p = self.complex.position(v);
-            let target = self.complex.constrain(v, p + d);
-            let d = (target - p).length();
-            if d > 0.0 {
-                max_disp = max_disp.max(d);
-                self.dest.set(v, target);
-            }
-        }
-        (length, max_disp)
-    }
-
-    /// Adds the smoothing terms to the displacement: term `b` with
-    /// coefficient `k = scale · weight / l` (the external scale, L), as ⌈k/max_step⌉ stable
-    /// sub-steps of its operator when it is linear ([`ForceTerm::apply_to`]),
-    /// else capped at `max_step`. At most [`MAX_SUBSTEPS`] sub-steps: a
-    /// larger coefficient is capped there, so an absurd β cannot stall a run.
-    fn add_smoothing(&mut self, kinds: &[TermKind], scale: f64, l: f64) {
-        for (b, term) in self.models.forces.iter_mut().enumerate() {
-            let TermKind::Smoothing { weight, max_step } = kinds[b] else {
-                continue;
-            };
-            let k = (scale * weight / l).min(max_step * MAX_SUBSTEPS);
-            let substeps = (k / max_step).ceil().max(1.0);
-            let buf = &self.buffers[b];
-            if substeps == 1.0
-                || !term.apply_to(&mut self.forces, &self.displacement, &mut self.applied)
-            {
-                let k = k.min(max_step);
-                for (d, f) in self.displacement.iter_mut().zip(buf) {
-                    *d += *f * k;
-                }
-                continue;
-            }
-            let k = k / substeps;
-            for sub in 0..substeps as usize {
-                if sub > 0 {
-                    term.apply_to(&mut self.forces, &self.displacement, &mut self.applied);
-                }
-                for ((d, f), a) in self.displacement.iter_mut().zip(buf).zip(&self.applied) {
-                    *d += (*f + *a) * k;
-                }
-            }
-        }
+        self.force.run(&mut self.models.forces, &input)
     }
 
     /// Whether the stopping rule is met.

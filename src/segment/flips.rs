@@ -36,6 +36,8 @@ pub struct Flipper {
     flipped: Vec<bool>,
     /// Scratch: the pixels of the cell being decided.
     pixels: Vec<usize>,
+    /// Scratch: the known phase means, with their labels.
+    order: Vec<(f64, Label)>,
 }
 
 impl Flipper {
@@ -72,34 +74,95 @@ impl Flipper {
         guard: bool,
         once: bool,
     ) -> usize {
-        let n = phases.mean.len();
         if once && self.flipped.len() != image.len() {
             self.flipped.clear();
             self.flipped.resize(image.len(), false);
         }
-        let mut order: [(f64, Label); 64] = [(0.0, 0); 64];
-        let mut known = 0;
-        for (k, m) in phases.mean.iter().enumerate() {
-            if let Some(m) = *m {
-                order[known] = (m, k as Label);
-                known += 1;
-            }
-        }
-        if known < 2 {
+        let rule = FlipRule {
+            image,
+            cells,
+            phases,
+            nu,
+            guard,
+        };
+        if !self.prepare(complex, &rule) {
             return 0;
         }
-        let order = &order[..known];
+        let mut flips = 0;
+        for i in 0..complex.cell_capacity() as u32 {
+            let c = CellId(i);
+            let Some(t) = self.target(complex, &rule, c) else {
+                continue;
+            };
+            if once {
+                if !self.first_flip_of_pixels(complex, image, c) {
+                    continue;
+                }
+                for &p in &self.pixels {
+                    self.flipped[p] = true;
+                }
+            }
+            complex.set_label(c, t);
+            flips += 1;
+        }
+        flips
+    }
+
+    /// Whether [`flip`](Self::flip) with these arguments would relabel a
+    /// cell, decided without changing any label: the sweep up to its first
+    /// flip (before it, every cell sees the labels as they are now).
+    #[allow(clippy::too_many_arguments)]
+    pub fn would_flip<K: Raster>(
+        &mut self,
+        complex: &Complex<K>,
+        image: &ImageView<'_>,
+        cells: &[CellStats],
+        phases: &PhaseStats,
+        nu: f64,
+        guard: bool,
+        once: bool,
+    ) -> bool {
+        let rule = FlipRule {
+            image,
+            cells,
+            phases,
+            nu,
+            guard,
+        };
+        if !self.prepare(complex, &rule) {
+            return false;
+        }
+        (0..complex.cell_capacity() as u32).any(|i| {
+            let c = CellId(i);
+            self.target(complex, &rule, c).is_some()
+                && (!once || self.first_flip_of_pixels(complex, image, c))
+        })
+    }
+
+    /// Orders the known means and, for more than two phases, finds each
+    /// cell's pixel-dominant phase. `false`: fewer than two means are
+    /// known, nothing can flip.
+    fn prepare<K: Raster>(&mut self, complex: &Complex<K>, rule: &FlipRule<'_, '_>) -> bool {
+        self.order.clear();
+        for (k, m) in rule.phases.mean.iter().enumerate() {
+            if let Some(m) = *m {
+                self.order.push((m, k as Label));
+            }
+        }
+        if self.order.len() < 2 {
+            return false;
+        }
         self.dominant.clear();
         self.dominant.resize(complex.cell_capacity(), None);
-        if n > 2 {
-            let cx: &Complex<K> = complex;
+        if rule.phases.mean.len() > 2 {
+            let (order, image, cells) = (&self.order, rule.image, rule.cells);
             self.dominant.par_iter_mut().enumerate().for_each(|(i, w)| {
                 let c = CellId(i as u32);
-                if !cx.is_alive(c) || cells[i].count == 0 {
+                if !complex.is_alive(c) || cells[i].count == 0 {
                     return;
                 }
                 let mut votes = [0u32; 64];
-                let pts = cx.cell_points(c);
+                let pts = complex.cell_points(c);
                 K::cell_pixels(image, &pts[..K::NV], &mut |p| {
                     let v = image.data[p] as f64;
                     let mut best = 0;
@@ -113,7 +176,7 @@ impl Flipper {
                     }
                     votes[best] += 1;
                 });
-                let own = cx.label(c);
+                let own = complex.label(c);
                 let vown = order
                     .iter()
                     .position(|&(_, l)| l == own)
@@ -128,80 +191,98 @@ impl Flipper {
                 }
             });
         }
-        let mut flips = 0;
-        let ids = 0..complex.cell_capacity() as u32;
-        for i in ids {
-            let c = CellId(i);
-            if !complex.is_alive(c) {
-                continue;
-            }
-            let st = cells[c.index()];
-            let Some(mt) = st.mean() else { continue };
-            let own = complex.label(c);
-            let Some(m_own) = phases.mean_of(own) else {
-                continue;
-            };
-            let candidate = if n == 2 {
-                let other = 1 - own.min(1);
-                match phases.mean_of(other) {
-                    Some(m_other) if (mt - m_other).abs() < (mt - m_own).abs() => Some(other),
-                    _ => None,
-                }
-            } else {
-                self.dominant[c.index()]
-            };
-            let target = match (candidate, guard) {
-                (Some(t), false) => Some(t),
-                // Nothing to consider (most cells: inside a phase, no candidate).
-                (None, true) if !has_other_neighbour(complex, c, own) => None,
-                (cand, true) => {
-                    // the rule's candidate, or (guarded) the neighbour phase
-                    // that lowers the energy most
-                    let base = st.sse(m_own);
-                    let mut best: Option<(f64, Label)> = None;
-                    let mut consider = |l: Label| {
-                        if l == own {
-                            return;
-                        }
-                        let Some(m) = phases.mean_of(l) else { return };
-                        let de = st.sse(m) - base + nu * added_length(complex, c, own, l);
-                        if de < 0.0 && best.is_none_or(|(b, _)| de < b) {
-                            best = Some((de, l));
-                        }
-                    };
-                    if let Some(t) = cand {
-                        consider(t);
-                    }
-                    // (tested here first: most cells are inside a phase)
-                    for nb in complex.neighbours(c).iter().flatten() {
-                        let l = complex.label(*nb);
-                        if l != own {
-                            consider(l);
-                        }
-                    }
-                    best.map(|(_, l)| l)
-                }
-                (None, false) => None,
-            };
-            let Some(t) = target else { continue };
-            if once {
-                self.pixels.clear();
-                let pts = complex.cell_points(c);
-                K::cell_pixels(image, &pts[..K::NV], &mut |p| self.pixels.push(p));
-                let seen = self.pixels.iter().filter(|&&p| self.flipped[p]).count();
-                if 2 * seen >= self.pixels.len() {
-                    continue;
-                }
-                for &p in &self.pixels {
-                    self.flipped[p] = true;
-                }
-            }
-            complex.set_label(c, t);
-            flips += 1;
+        true
+    }
+
+    /// The label cell `c` flips to, given the labels as they are now (after
+    /// [`prepare`](Self::prepare)).
+    fn target<K: Raster>(
+        &self,
+        complex: &Complex<K>,
+        rule: &FlipRule<'_, '_>,
+        c: CellId,
+    ) -> Option<Label> {
+        if !complex.is_alive(c) {
+            return None;
         }
-        flips
+        let phases = rule.phases;
+        let st = rule.cells[c.index()];
+        let mt = st.mean()?;
+        let own = complex.label(c);
+        let m_own = phases.mean_of(own)?;
+        let candidate = if phases.mean.len() == 2 {
+            let other = 1 - own.min(1);
+            match phases.mean_of(other) {
+                Some(m_other) if (mt - m_other).abs() < (mt - m_own).abs() => Some(other),
+                _ => None,
+            }
+        } else {
+            self.dominant[c.index()]
+        };
+        match (candidate, rule.guard) {
+            (cand, false) => cand,
+            // Nothing to consider (most cells: inside a phase, no candidate).
+            (None, true) if !has_other_neighbour(complex, c, own) => None,
+            (cand, true) => {
+                // the rule's candidate, or (guarded) the neighbour phase
+                // that lowers the energy most
+                let base = st.sse(m_own);
+                let mut best: Option<(f64, Label)> = None;
+                let mut consider = |l: Label| {
+                    if l == own {
+                        return;
+                    }
+                    let Some(m) = phases.mean_of(l) else { return };
+                    let de = st.sse(m) - base + rule.nu * added_length(complex, c, own, l);
+                    if de < 0.0 && best.is_none_or(|(b, _)| de < b) {
+                        best = Some((de, l));
+                    }
+                };
+                if let Some(t) = cand {
+                    consider(t);
+                }
+                // (tested here first: most cells are inside a phase)
+                for nb in complex.neighbours(c).iter().flatten() {
+                    let l = complex.label(*nb);
+                    if l != own {
+                        consider(l);
+                    }
+                }
+                best.map(|(_, l)| l)
+            }
+        }
+    }
+
+    /// With `once`: whether fewer than half of `c`'s pixels (listed in
+    /// `pixels`) have been relabelled by a cell flip before.
+    fn first_flip_of_pixels<K: Raster>(
+        &mut self,
+        complex: &Complex<K>,
+        image: &ImageView<'_>,
+        c: CellId,
+    ) -> bool {
+        self.pixels.clear();
+        let pts = complex.cell_points(c);
+        K::cell_pixels(image, &pts[..K::NV], &mut |p| self.pixels.push(p));
+        // (before the first flip of a run nothing was flipped: no record yet)
+        let seen = self
+            .pixels
+            .iter()
+            .filter(|&&p| self.flipped.get(p).is_some_and(|&f| f))
+            .count();
+        2 * seen < self.pixels.len()
     }
 }
+
+/// The inputs of one cell-flip sweep.
+struct FlipRule<'r, 'a> {
+    image: &'r ImageView<'a>,
+    cells: &'r [CellStats],
+    phases: &'r PhaseStats,
+    nu: f64,
+    guard: bool,
+}
+
 impl Flipper {
     /// Component flips: every connected same-phase region is relabelled as a
     /// whole to the neighbouring phase that lowers `data + ν·length` most, if
@@ -216,13 +297,42 @@ impl Flipper {
         phases: &PhaseStats,
         nu: f64,
     ) -> usize {
+        self.component_changes(complex, cells, phases, nu);
+        if !self.changes.is_empty() {
+            complex.set_labels(&self.changes);
+        }
+        self.changes.len()
+    }
+
+    /// Whether [`component_flips`](Self::component_flips) would relabel a
+    /// cell; changes no label.
+    pub fn would_flip_components<K: Raster>(
+        &mut self,
+        complex: &Complex<K>,
+        cells: &[CellStats],
+        phases: &PhaseStats,
+        nu: f64,
+    ) -> bool {
+        self.component_changes(complex, cells, phases, nu);
+        !self.changes.is_empty()
+    }
+
+    /// Lists in `changes` the relabelling of [`component_flips`](Self::component_flips)
+    /// (every decision is made on the labels as they are now).
+    fn component_changes<K: Raster>(
+        &mut self,
+        complex: &Complex<K>,
+        cells: &[CellStats],
+        phases: &PhaseStats,
+        nu: f64,
+    ) {
+        self.changes.clear();
         if nu <= 0.0 {
-            return 0;
+            return;
         }
         let cap = complex.cell_capacity();
         self.comp.clear();
         self.comp.resize(cap, u32::MAX);
-        self.changes.clear();
         let mut ncomp = 0u32;
         for i in 0..cap as u32 {
             let start = CellId(i);
@@ -279,10 +389,6 @@ impl Flipper {
                 self.changes.extend(self.members.iter().map(|&c| (c, l)));
             }
         }
-        if !self.changes.is_empty() {
-            complex.set_labels(&self.changes);
-        }
-        self.changes.len()
     }
 }
 

@@ -9,6 +9,8 @@
 //!   per-phase means;
 //! - [`init`]: range/interval, disk and label-image initialisations;
 //! - [`forces`]: region forces (eqs. 5–7) and rigidity (eq. 2);
+//! - `force_stage`: an iteration's force terms summed, its step and the
+//!   destinations of the deformation;
 //! - [`flips`]: label flips (mean rule, pixel-dominant rule);
 //! - [`model`]: the extension points ([`ForceTerm`], [`LabelRule`],
 //!   [`Initialiser`], [`Models`]) through which a user supplies the evolution;
@@ -23,6 +25,7 @@
 pub mod driver;
 pub mod error;
 pub mod flips;
+mod force_stage;
 pub mod forces;
 pub mod image;
 pub mod init;
