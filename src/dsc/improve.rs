@@ -215,13 +215,17 @@ impl<K: Connectivity> Complex<K> {
         stats.smoothed += self.smooth_vertices(&vertices, memo);
         stats.flips += K::improve_connectivity_in(self, &mut region, params, memo);
         cells.extend_from_slice(region.cells(self));
-        marks.clear();
-        marks.resize(self.cell_capacity(), false);
-        for &c in &cells {
-            marks[c.index()] = true;
-        }
-        self.grow_region(&mut cells, &mut marks);
-        let (safe, unsafe_, splits) = self.remove_degenerate_in(&cells, params);
+        let (safe, unsafe_, splits) = if self.degenerate_near(&cells, params, memo) {
+            marks.clear();
+            marks.resize(self.cell_capacity(), false);
+            for &c in &cells {
+                marks[c.index()] = true;
+            }
+            self.grow_region(&mut cells, &mut marks);
+            self.remove_degenerate_in(&cells, params)
+        } else {
+            (0, 0, 0)
+        };
         if safe + unsafe_ + splits > 0 {
             region.invalidate();
         }
@@ -252,6 +256,34 @@ impl<K: Connectivity> Complex<K> {
                 }
             }
         }
+    }
+
+    /// Whether a cell sharing a vertex with `cells` (a cell of the region
+    /// [`grow_region`](Self::grow_region) makes) is degenerate. Usually none
+    /// is, and then removing degenerate cells there changes nothing: this
+    /// answers that without listing the region, walking only the stars that
+    /// changed since `memo` last found them free of degenerate cells.
+    fn degenerate_near(
+        &self,
+        cells: &[CellId],
+        params: &DscParams,
+        memo: &mut ImproveMemo,
+    ) -> bool {
+        let mut vertices = Vec::new();
+        let mut vmarks = Vec::new();
+        self.region_vertices(cells, &mut vertices, &mut vmarks);
+        let mut star = Vec::new();
+        for &v in &vertices {
+            if memo.still_sound(self, v) {
+                continue;
+            }
+            self.star_into(v, &mut star);
+            if star.iter().any(|&c| self.is_degenerate(c, params)) {
+                return true;
+            }
+            memo.set_sound(self, v);
+        }
+        false
     }
 
     /// The region grown by one ring: every cell sharing a vertex with `cells`.
@@ -421,5 +453,64 @@ impl<K: Connectivity> Complex<K> {
             }
         }
         worst
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dsc::Destinations;
+    use nalgebra::Vector2;
+
+    /// `degenerate_near` with one memo across rounds of moves answers what
+    /// listing the grown region and testing every cell of it answers.
+    #[test]
+    fn degenerate_near_answers_like_the_grown_region() {
+        let l = 4.0;
+        let mut mesh = Complex::<D2>::rectangle(60.0, 52.0, l).unwrap();
+        mesh.label_by(|p| u32::from((p - Vector2::new(30.0, 26.0)).norm() < 14.0));
+        let mut params = DscParams::new::<D2>(l);
+        // Strict, so that moves make degenerate cells often.
+        params.degenerate_quality = 0.2;
+        let mut memo = ImproveMemo::new();
+        let mut star = Vec::new();
+        let (mut yes, mut no) = (0, 0);
+        for round in 0..40 {
+            let ids: Vec<VertexId> = mesh.vertex_ids().collect();
+            for (k, &v) in ids.iter().enumerate() {
+                if (k + round) % 7 == 0 {
+                    let p = mesh.position(v);
+                    let d = Vector2::new((k as f64).sin(), (round as f64 + k as f64).cos());
+                    mesh.move_towards(v, p + d * (0.5 * l), 1e-4 * l, &mut star);
+                }
+            }
+            let seeds: Vec<VertexId> = ids.iter().copied().step_by(3 + round % 4).collect();
+            let mut cells = Vec::new();
+            mesh.region_cells(&seeds, &mut cells, &mut Vec::new());
+            let mut grown = cells.clone();
+            let mut marks = vec![false; mesh.cell_capacity()];
+            for &c in &grown {
+                marks[c.index()] = true;
+            }
+            mesh.grow_region(&mut grown, &mut marks);
+            let fresh = grown.iter().any(|&c| mesh.is_degenerate(c, &params));
+            assert_eq!(
+                mesh.degenerate_near(&cells, &params, &mut memo),
+                fresh,
+                "round {round}"
+            );
+            if fresh {
+                yes += 1;
+                // Remove them, as the improvement would, so that later
+                // rounds start sound.
+                mesh.remove_degenerate_in(&grown, &params);
+            } else {
+                no += 1;
+            }
+        }
+        assert!(
+            yes >= 5 && no >= 5,
+            "{yes} with, {no} without degenerate cells"
+        );
     }
 }

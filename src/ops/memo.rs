@@ -29,6 +29,8 @@ pub(crate) struct Stamp {
 pub struct ImproveMemo {
     /// Per vertex: the move clock when smoothing last left it in place.
     kept: Vec<Option<u64>>,
+    /// Per vertex: the move clock when its star last had no degenerate cell.
+    sound: Vec<Option<u64>>,
     /// Per cell (2D): when all of its edges were last found not to flip.
     settled: Vec<Option<Stamp>>,
 }
@@ -51,6 +53,17 @@ impl ImproveMemo {
     #[inline]
     pub(crate) fn still_kept<K: Dim>(&self, complex: &Complex<K>, v: VertexId) -> bool {
         get(&self.kept, v.index()).is_some_and(|t| complex.star_changed_at(v) <= t)
+    }
+
+    /// Records that no cell of `v`'s star is degenerate now.
+    pub(crate) fn set_sound<K: Dim>(&mut self, complex: &Complex<K>, v: VertexId) {
+        put(&mut self.sound, v.index(), Some(complex.move_clock()));
+    }
+
+    /// Whether `v`'s star had no degenerate cell and has not changed since.
+    #[inline]
+    pub(crate) fn still_sound<K: Dim>(&self, complex: &Complex<K>, v: VertexId) -> bool {
+        get(&self.sound, v.index()).is_some_and(|t| complex.star_changed_at(v) <= t)
     }
 
     /// Records that no edge of `c` flipped when tested against the cells

@@ -5,7 +5,7 @@ use super::force_stage::{ForceInputs, ForceStage};
 use super::forces::ForceField;
 use super::image::ImageView;
 use super::integrate::{CellCache, CellStats, PhaseStats};
-use super::model::{Flow, InitContext, LabelContext, Models};
+use super::model::{Flow, InitContext, LabelContext, LabelView, Models};
 use super::params::SegmentParams;
 use super::raster::Raster;
 use crate::complex::Complex;
@@ -127,6 +127,10 @@ pub struct Segmentation<'a, K: Raster> {
     models: Models<K>,
     /// The force stage's fields, buffers and destinations.
     force: ForceStage<K>,
+    /// Whether the label rules can predict their changes
+    /// ([`LabelRule::would_relabel`](super::model::LabelRule::would_relabel)) so that
+    /// they are checked beside the forces.
+    predict_flips: bool,
     nu: f64,
     range: (f64, f64),
     times: StageTimes,
@@ -256,6 +260,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             phases,
             models,
             force,
+            predict_flips: true,
             nu: 0.0,
             range,
             times: StageTimes::default(),
@@ -381,33 +386,33 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let iteration = self.history.len() + 1;
         self.integrate();
 
-        let mut flips = 0;
-        if self.params.label_flips && (iteration - 1) % self.params.flip_interval.max(1) == 0 {
+        let flips_due =
+            self.params.label_flips && (iteration - 1) % self.params.flip_interval.max(1) == 0;
+        // Most iterations flip nothing: after one that flipped nothing, the
+        // rules only check, beside the forces, whether they would flip.
+        let mut forces = None;
+        if flips_due && self.predict_flips && self.history.last().is_some_and(|r| r.flips == 0) {
             let t = Instant::now();
-            let mut ctx = LabelContext {
-                complex: &mut self.complex,
-                image: &self.image,
-                cells: &self.cells,
-                phases: &self.phases,
-                params: &self.params,
-                length_weight: self.nu,
-                iteration,
-            };
-            for rule in &mut self.models.rules {
-                flips += rule.relabel(&mut ctx);
+            let (computed, would_flip) = self.forces_beside_flip_check(iteration);
+            self.times.forces += t.elapsed().as_secs_f64();
+            if !would_flip {
+                forces = Some(computed);
             }
-            if flips > 0 {
-                self.phases.update(&self.complex, &self.cells);
-            }
-            self.times.flips += t.elapsed().as_secs_f64();
+        }
+        let mut flips = 0;
+        if flips_due && forces.is_none() {
+            flips = self.relabel(iteration);
         }
         // The record is of one state: the labels after the flips, whose
         // length term the forces measure below.
         let data_energy = self.data_energy();
 
-        let t = Instant::now();
-        let (length, max_disp) = self.forces_and_destinations(iteration);
-        self.times.forces += t.elapsed().as_secs_f64();
+        let (length, max_disp) = forces.unwrap_or_else(|| {
+            let t = Instant::now();
+            let computed = self.forces_and_destinations(iteration);
+            self.times.forces += t.elapsed().as_secs_f64();
+            computed
+        });
         let l = self.dsc.edge_length;
 
         let t = Instant::now();
@@ -461,6 +466,77 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.integrate();
         let (_, max_disp) = self.forces_and_destinations(self.history.len() + 1);
         max_disp / self.dsc.edge_length
+    }
+
+    /// Runs the label rules; returns how many cells changed label.
+    fn relabel(&mut self, iteration: usize) -> usize {
+        let t = Instant::now();
+        let mut ctx = LabelContext {
+            complex: &mut self.complex,
+            image: &self.image,
+            cells: &self.cells,
+            phases: &self.phases,
+            params: &self.params,
+            length_weight: self.nu,
+            iteration,
+        };
+        let mut flips = 0;
+        for rule in &mut self.models.rules {
+            flips += rule.relabel(&mut ctx);
+        }
+        if flips > 0 {
+            self.phases.update(&self.complex, &self.cells);
+        }
+        self.times.flips += t.elapsed().as_secs_f64();
+        flips
+    }
+
+    /// [`forces_and_destinations`](Self::forces_and_destinations) and, on
+    /// the helper thread meanwhile, whether a label rule would change a
+    /// label ([`would_relabel`](super::model::LabelRule::would_relabel); a rule that cannot tell counts
+    /// as yes, and turns these predictions off for the run).
+    fn forces_beside_flip_check(&mut self, iteration: usize) -> ((f64, f64), bool) {
+        let input = ForceInputs {
+            complex: &self.complex,
+            image: &self.image,
+            phases: &self.phases,
+            cells: &self.cells,
+            params: &self.params,
+            range: self.range,
+            edge_length: self.dsc.edge_length,
+            step: self.step,
+            iteration,
+        };
+        let view = LabelView {
+            complex: &self.complex,
+            image: &self.image,
+            cells: &self.cells,
+            phases: &self.phases,
+            params: &self.params,
+            length_weight: self.nu,
+            iteration,
+        };
+        let (force, terms, rules) = (
+            &mut self.force,
+            &mut self.models.forces,
+            &mut self.models.rules,
+        );
+        let (computed, answers) = self.helper.join(
+            || force.run(terms, &input),
+            || {
+                rules
+                    .iter_mut()
+                    .map(|r| r.would_relabel(&view))
+                    .try_fold(false, |any, a| a.map(|a| any || a))
+            },
+        );
+        match answers {
+            Some(would_flip) => (computed, would_flip),
+            None => {
+                self.predict_flips = false;
+                (computed, true)
+            }
+        }
     }
 
     /// Computes the forces of iteration `iteration` and fills the

@@ -45,7 +45,7 @@ pub use image::ImageView;
 pub use integrate::{CellStats, PhaseStats};
 pub use model::{
     phase_normals, Flow, ForceContext, ForceTerm, InitContext, Initialiser, LabelContext,
-    LabelRule, Models, TermKind,
+    LabelRule, LabelView, Models, TermKind,
 };
 pub use params::{
     default_edge_length, ForceModel, Init, InitBall, InitDisk, JunctionForce, SegmentParams,

@@ -280,12 +280,42 @@ pub struct LabelContext<'c, 'a, K: Raster> {
     pub iteration: usize,
 }
 
+/// What a label rule reads to predict whether it would change a label
+/// ([`LabelRule::would_relabel`]): a [`LabelContext`] that cannot change any.
+pub struct LabelView<'c, 'a, K: Raster> {
+    /// The complex.
+    pub complex: &'c Complex<K>,
+    /// The image.
+    pub image: &'c ImageView<'a>,
+    /// Per-cell sums, indexed by cell id.
+    pub cells: &'c [CellStats],
+    /// Phase statistics.
+    pub phases: &'c PhaseStats,
+    /// The parameters.
+    pub params: &'c SegmentParams,
+    /// The length weight ν of the Mumford–Shah energy.
+    pub length_weight: f64,
+    /// The iteration being computed, from 1.
+    pub iteration: usize,
+}
+
 /// A rule that changes cell labels (the paper's label flips, section III.C).
 pub trait LabelRule<K: Raster>: AsAny + Send {
     /// A short name for reports and debugging.
     fn name(&self) -> &str;
     /// Changes labels; returns how many cells changed.
     fn relabel(&mut self, ctx: &mut LabelContext<'_, '_, K>) -> usize;
+    /// Whether [`relabel`](Self::relabel) would change a label now, decided
+    /// without changing any; `None` (the default) if the rule cannot tell.
+    ///
+    /// Most iterations flip nothing. When every rule can tell, the driver
+    /// asks them on its second thread while it computes the forces, and runs
+    /// the rules (and the forces again) only if one of them would change a
+    /// label: the same result, the rules' time hidden behind the forces'.
+    fn would_relabel(&mut self, view: &LabelView<'_, '_, K>) -> Option<bool> {
+        let _ = view;
+        None
+    }
 }
 
 /// What an initialisation may read and change.

@@ -10,7 +10,7 @@ use crate::segment::flips::Flipper;
 use crate::segment::forces::ForceField;
 use crate::segment::init::initialise;
 use crate::segment::model::{
-    ForceContext, ForceTerm, InitContext, Initialiser, LabelContext, LabelRule, TermKind,
+    ForceContext, ForceTerm, InitContext, Initialiser, LabelContext, LabelRule, LabelView, TermKind,
 };
 use crate::segment::params::{ForceModel, SegmentParams};
 use crate::segment::raster::Raster;
@@ -144,6 +144,18 @@ impl<K: Raster> LabelRule<K> for CellFlips {
             ctx.params.flip_once,
         )
     }
+
+    fn would_relabel(&mut self, view: &LabelView<'_, '_, K>) -> Option<bool> {
+        Some(self.flipper.would_flip(
+            view.complex,
+            view.image,
+            view.cells,
+            view.phases,
+            view.length_weight,
+            view.params.flip_guard,
+            view.params.flip_once,
+        ))
+    }
 }
 
 /// Whole-region flips (with [`SegmentParams::flip_guard`] only): every
@@ -165,6 +177,18 @@ impl<K: Raster> LabelRule<K> for ComponentFlips {
         }
         self.flipper
             .component_flips(ctx.complex, ctx.cells, ctx.phases, ctx.length_weight)
+    }
+
+    fn would_relabel(&mut self, view: &LabelView<'_, '_, K>) -> Option<bool> {
+        Some(
+            view.params.flip_guard
+                && self.flipper.would_flip_components(
+                    view.complex,
+                    view.cells,
+                    view.phases,
+                    view.length_weight,
+                ),
+        )
     }
 }
 
