@@ -459,7 +459,6 @@ impl<K: Connectivity> Complex<K> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dsc::Destinations;
     use nalgebra::Vector2;
 
     /// `degenerate_near` with one memo across rounds of moves answers what
