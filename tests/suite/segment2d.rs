@@ -375,3 +375,55 @@ fn absurd_rigidity_is_capped_not_stalled() {
     assert!(r.report.history.iter().all(|h| h.energy.is_finite()));
     assert!(r.dice > 0.5, "dice {}", r.dice);
 }
+
+/// The driver checks the label rules beside the forces (and runs them only
+/// if one would flip): the run is the one of rules that cannot predict,
+/// which the driver runs before the forces every iteration.
+#[test]
+fn predicted_flips_give_the_run_of_rules_run_every_iteration() {
+    use dsc_seg::dim::D2;
+    use dsc_seg::segment::{
+        ImageView, LabelContext, LabelRule, Models, SegmentParams, Segmentation,
+    };
+    /// A rule that hides its predictions.
+    struct Opaque(Box<dyn LabelRule<D2>>);
+    impl LabelRule<D2> for Opaque {
+        fn name(&self) -> &str {
+            self.0.name()
+        }
+        fn relabel(&mut self, ctx: &mut LabelContext<'_, '_, D2>) -> usize {
+            self.0.relabel(ctx)
+        }
+    }
+    let p = dsc_seg::phantom::shapes2d::four_phase(96, 0.25, 3);
+    let image = ImageView::new_2d(p.width, p.height, &p.image).unwrap();
+    let mut params = SegmentParams::new(4);
+    params.max_iterations = 80;
+    let run = |models: Models<D2>| {
+        let mut seg = Segmentation::<D2>::with_models(image, params.clone(), models).unwrap();
+        seg.run(|_| {});
+        (seg.history().to_vec(), seg.label_image())
+    };
+    let (predicted, labels) = run(Models::paper());
+    let mut opaque = Models::paper();
+    opaque.rules = opaque
+        .rules
+        .into_iter()
+        .map(|r| Box::new(Opaque(r)) as Box<dyn LabelRule<D2>>)
+        .collect();
+    let (every, labels_every) = run(opaque);
+    assert_eq!(labels, labels_every);
+    assert_eq!(predicted.len(), every.len());
+    for (a, b) in predicted.iter().zip(&every) {
+        assert_eq!((a.flips, a.energy.to_bits()), (b.flips, b.energy.to_bits()));
+    }
+    // Flips after a quiet iteration: the forces computed beside the check
+    // were discarded and computed again after the flips.
+    assert!(
+        predicted
+            .windows(2)
+            .any(|w| w[0].flips == 0 && w[1].flips > 0),
+        "{:?}",
+        predicted.iter().map(|r| r.flips).collect::<Vec<_>>()
+    );
+}
