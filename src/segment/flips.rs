@@ -416,3 +416,62 @@ fn added_length<K: Raster>(cx: &Complex<K>, c: CellId, own: Label, new: Label) -
     }
     d
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dim::D2;
+    use crate::segment::integrate::integrate_cells;
+    use nalgebra::Vector2;
+
+    /// The predictions answer whether the sweeps change a label: a bright
+    /// disk labelled right (no flip), with a dark speck labelled like the
+    /// disk (its cells, and then the speck as a component, flip).
+    #[test]
+    fn predictions_answer_whether_the_sweeps_flip() {
+        let (w, h) = (64usize, 64usize);
+        let centre = Vector2::new(32.0, 32.0);
+        let pixels: Vec<f32> = (0..w * h)
+            .map(|i| {
+                let p = Vector2::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+                if (p - centre).norm() < 18.0 {
+                    0.8
+                } else {
+                    0.2
+                }
+            })
+            .collect();
+        let image = ImageView::new_2d(w, h, &pixels).unwrap();
+        for speck in [0.0, 4.0] {
+            let mut mesh = Complex::<D2>::rectangle(w as f64, h as f64, 3.0).unwrap();
+            let inner = Vector2::new(52.0, 10.0);
+            mesh.label_by(|p| u32::from((p - centre).norm() < 18.0 || (p - inner).norm() < speck));
+            let mut cells = Vec::new();
+            integrate_cells(&mesh, &image, &mut cells);
+            let mut phases = PhaseStats::new(2);
+            phases.update(&mesh, &cells);
+            for guard in [false, true] {
+                let mut flipper = Flipper::new();
+                let would = flipper.would_flip(&mesh, &image, &cells, &phases, 0.05, guard, false);
+                let flipped = flipper.flip(
+                    &mut mesh.clone(),
+                    &image,
+                    &cells,
+                    &phases,
+                    0.05,
+                    guard,
+                    false,
+                );
+                assert_eq!(would, flipped > 0, "speck {speck}, guard {guard}");
+            }
+            let would = Flipper::new().would_flip_components(&mesh, &cells, &phases, 0.05);
+            let flipped = Flipper::new().component_flips(&mut mesh.clone(), &cells, &phases, 0.05);
+            assert_eq!(would, flipped > 0, "speck {speck}: components");
+            assert_eq!(
+                flipped > 0,
+                speck > 0.0,
+                "speck {speck}: the test's premise"
+            );
+        }
+    }
+}
