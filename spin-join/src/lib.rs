@@ -19,7 +19,7 @@
 //! finished.
 #![warn(missing_docs)]
 
-use std::marker::PhantomData;
+use std::cell::Cell;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
@@ -35,8 +35,9 @@ pub const SPIN: Duration = Duration::from_millis(5);
 /// `Send` but not `Sync`: one owner posts one job at a time.
 pub struct SpinHelper {
     worker: Option<Worker>,
-    /// Not `Sync`: `join` assumes a single caller.
-    _not_sync: PhantomData<std::cell::Cell<()>>,
+    /// Whether a job is in flight: a `join` inside a `join`'s first closure
+    /// then runs both of its closures on the caller (not `Sync`: one caller).
+    busy: Cell<bool>,
 }
 
 struct Worker {
@@ -103,7 +104,7 @@ impl SpinHelper {
     pub fn none() -> Self {
         SpinHelper {
             worker: None,
-            _not_sync: PhantomData,
+            busy: Cell::new(false),
         }
     }
 
@@ -121,7 +122,7 @@ impl SpinHelper {
             .spawn(move || work_loop(&theirs))?;
         Ok(SpinHelper {
             worker: Some(Worker { shared, thread }),
-            _not_sync: PhantomData,
+            busy: Cell::new(false),
         })
     }
 
@@ -139,10 +140,11 @@ impl SpinHelper {
         B: FnOnce() -> RB + Send,
         RB: Send,
     {
-        let Some(worker) = &self.worker else {
+        let Some(worker) = self.worker.as_ref().filter(|_| !self.busy.get()) else {
             let ra = a();
             return (ra, b());
         };
+        self.busy.set(true);
         let mut packet = Packet {
             work: Some(b),
             outcome: None,
@@ -156,6 +158,7 @@ impl SpinHelper {
         let wait = WaitFor {
             shared: &worker.shared,
             seq,
+            busy: &self.busy,
         };
         let ra = a();
         drop(wait);
@@ -206,10 +209,12 @@ impl Drop for SpinHelper {
     }
 }
 
-/// Blocks, on drop, until the helper has finished job `seq`.
+/// Blocks, on drop, until the helper has finished job `seq`; then frees
+/// the helper for the next `join`.
 struct WaitFor<'a> {
     shared: &'a Shared,
     seq: u64,
+    busy: &'a Cell<bool>,
 }
 
 impl Drop for WaitFor<'_> {
@@ -221,6 +226,7 @@ impl Drop for WaitFor<'_> {
             }
             thread::yield_now();
         }
+        self.busy.set(false);
     }
 }
 
@@ -296,6 +302,21 @@ mod tests {
             || hi.iter_mut().for_each(|x| *x = 2),
         );
         assert!(out[..500].iter().all(|&x| x == 1) && out[500..].iter().all(|&x| x == 2));
+    }
+
+    #[test]
+    fn a_join_inside_a_join_runs_on_the_caller() {
+        let helper = SpinHelper::spawn().unwrap();
+        let outer = thread::current().id();
+        let ((a, b), c) = helper.join(
+            || helper.join(|| thread::current().id(), || thread::current().id()),
+            || thread::current().id(),
+        );
+        assert_eq!((a, b), (outer, outer));
+        assert_ne!(c, outer);
+        // And the helper is free again afterwards.
+        let (_, d) = helper.join(|| (), || thread::current().id());
+        assert_ne!(d, outer);
     }
 
     #[test]
