@@ -3,7 +3,7 @@
 use super::DscParams;
 use crate::complex::{CellId, Complex, Rejection, VertexId};
 use crate::dim::{Dim, D2, D3};
-use crate::ops::{edge_settled, CollapseMode, ImproveMemo};
+use crate::ops::{edge_settled, CollapseMode, ImproveMemo, SmoothScratch};
 use serde::Serialize;
 
 /// The dimension-specific connectivity improvement (2D edge flips, 3D flips).
@@ -323,10 +323,10 @@ impl<K: Connectivity> Complex<K> {
 
     /// One Laplacian pass over the given vertices (interface vertices are skipped).
     pub fn smooth_vertices(&mut self, vertices: &[VertexId], memo: &mut ImproveMemo) -> usize {
-        let mut star = Vec::new();
+        let mut scratch = SmoothScratch::default();
         vertices
             .iter()
-            .filter(|&&v| self.smooth_vertex(v, &mut star, memo))
+            .filter(|&&v| self.smooth_vertex(v, &mut scratch, memo))
             .count()
     }
 

@@ -16,3 +16,4 @@ pub use flip3d::{Flip3, MAX_RING};
 pub(crate) use memo::edge_settled;
 pub use memo::ImproveMemo;
 pub use relocate::MoveOutcome;
+pub use smooth::SmoothScratch;

@@ -108,38 +108,4 @@ impl<K: Dim> Complex<K> {
             K::orient(&pts[..K::NV]) > 0.0
         })
     }
-
-    /// Smallest quality over `cells` with `v` placed at `q`.
-    pub(crate) fn min_quality_at(&self, cells: &[CellId], v: VertexId, q: K::Point) -> f64 {
-        cells
-            .iter()
-            .map(|&c| {
-                let mut pts = self.cell_points(c);
-                if let Some(i) = self.local_index(c, v) {
-                    pts[i] = q;
-                }
-                K::quality(&pts[..K::NV])
-            })
-            .fold(1.0, f64::min)
-    }
-
-    /// Whether every cell of `cells` has quality at least `bound` with `v`
-    /// placed at `q`: exactly `min_quality_at(cells, v, q) >= bound` for
-    /// `bound <= 1`, but without the square roots (see
-    /// [`Dim::quality_at_least`]).
-    pub(crate) fn qualities_at_least(
-        &self,
-        cells: &[CellId],
-        v: VertexId,
-        q: K::Point,
-        bound: f64,
-    ) -> bool {
-        cells.iter().all(|&c| {
-            let mut pts = self.cell_points(c);
-            if let Some(i) = self.local_index(c, v) {
-                pts[i] = q;
-            }
-            K::quality_at_least(&pts[..K::NV], bound)
-        })
-    }
 }
