@@ -332,16 +332,22 @@ impl<K: Connectivity> Complex<K> {
 
     /// Whether a cell is degenerate by quality, measure or edge length.
     pub fn is_degenerate(&self, c: CellId, params: &DscParams) -> bool {
-        // (the exact comparison, without the square root of the quality)
+        // (the exact comparison, without the square root of the quality;
+        // every test on one read of the corners)
         let pts = self.cell_points(c);
-        if !K::quality_at_least(&pts[..K::NV], params.degenerate_quality)
-            || self.measure(c) < params.measure::<K>(params.degenerate_measure)
+        let pts = &pts[..K::NV];
+        if !K::quality_at_least(pts, params.degenerate_quality)
+            || K::signed_measure(pts) < params.measure::<K>(params.degenerate_measure)
         {
             return true;
         }
-        let (a, b) = self.shortest_edge(c);
-        crate::dim::Point::length(&(self.position(a) - self.position(b)))
-            < params.degenerate_length * params.edge_length
+        let mut shortest = f64::INFINITY;
+        for i in 0..K::NV {
+            for j in i + 1..K::NV {
+                shortest = shortest.min(crate::dim::Point::length(&(pts[i] - pts[j])));
+            }
+        }
+        shortest < params.degenerate_length * params.edge_length
     }
 
     /// Removes degenerate cells by collapsing their edges, shortest first: a
