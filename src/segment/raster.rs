@@ -310,8 +310,10 @@ impl Raster for D2 {
         let (w, h) = (image.dims[0], image.dims[1]);
         let x = (p.x - 0.5).clamp(0.0, (w - 1) as f64);
         let y = (p.y - 0.5).clamp(0.0, (h - 1) as f64);
-        let x0 = (x.floor() as usize).min(w.saturating_sub(2));
-        let y0 = (y.floor() as usize).min(h.saturating_sub(2));
+        // (truncation is the floor of these non-negative values, without
+        // libm's `floor` call per sample)
+        let x0 = (x as usize).min(w.saturating_sub(2));
+        let y0 = (y as usize).min(h.saturating_sub(2));
         let x1 = (x0 + 1).min(w - 1);
         let y1 = (y0 + 1).min(h - 1);
         let fx = x - x0 as f64;
@@ -368,7 +370,8 @@ impl Raster for D3 {
         for axis in 0..3 {
             let n = image.dims[axis];
             let x = (p[axis] - 0.5).clamp(0.0, (n - 1) as f64);
-            i0[axis] = (x.floor() as usize).min(n - 1);
+            // (truncation: the floor of a non-negative value)
+            i0[axis] = (x as usize).min(n - 1);
             i1[axis] = (i0[axis] + 1).min(n - 1);
             t[axis] = x - i0[axis] as f64;
         }
