@@ -14,9 +14,9 @@
 //! past two threads.
 //!
 //! This is the only `unsafe` code of dsc-seg (whose crate forbids it): the
-//! job a helper runs borrows from the caller's stack frame, and [`join`]
-//! (`SpinHelper::join`) does not return, nor unwind, before that job has
-//! finished.
+//! job a helper runs borrows from the caller's stack frame, and
+//! [`join`](SpinHelper::join) does not return, nor unwind, before that job
+//! has finished.
 #![warn(missing_docs)]
 
 use std::cell::Cell;
