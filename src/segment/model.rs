@@ -242,10 +242,10 @@ pub trait ForceTerm<K: Raster>: AsAny + Send {
     /// are ignored by the driver). Vertices on the domain border are later
     /// constrained to slide along it.
     ///
-    /// Called once per iteration, or twice when the label rules predicted
-    /// no flip but then flip after all (the forces are computed again on
-    /// the new labels; see [`LabelRule::would_relabel`]): the forces should
-    /// be a function of `ctx`.
+    /// Called once per iteration, or twice when the label rules, checked
+    /// beside this computation, turn out to change labels (the forces are
+    /// then computed again on the new labels; see
+    /// [`LabelRule::would_relabel`]): the forces should be a function of `ctx`.
     fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]);
 
     /// For a [`TermKind::Smoothing`] term whose direction is linear in the
