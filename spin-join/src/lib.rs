@@ -88,13 +88,11 @@ unsafe fn run_packet<B: FnOnce() -> R, R>(packet: *mut ()) {
 }
 
 impl SpinHelper {
-    /// A helper thread if this machine has a second core and rayon is not
-    /// limited to one thread (`RAYON_NUM_THREADS=1` keeps a whole run on
-    /// one thread, e.g. for instruction counts); otherwise no thread.
+    /// A helper thread if this machine has a second core (and the thread
+    /// can be started); otherwise no thread.
     pub fn new() -> Self {
         let cores = thread::available_parallelism().map_or(1, |n| n.get());
-        let one_thread = std::env::var("RAYON_NUM_THREADS").is_ok_and(|v| v.trim() == "1");
-        if cores < 2 || one_thread {
+        if cores < 2 {
             return Self::none();
         }
         Self::spawn().unwrap_or_else(|_| Self::none())
@@ -134,6 +132,11 @@ impl SpinHelper {
     /// Runs `a` on this thread and `b` on the helper, at the same time, and
     /// returns both results (without a helper: `a` then `b`). A panic in
     /// either is resumed here once both have finished.
+    ///
+    /// The caller waits for `b` without doing other work: `b` must not
+    /// wait for a thread pool the caller belongs to (e.g. rayon work posted
+    /// from `b` while the caller is one of rayon's workers, all of which
+    /// may be waiting so).
     pub fn join<A, B, RA, RB>(&self, a: A, b: B) -> (RA, RB)
     where
         A: FnOnce() -> RA,

@@ -129,6 +129,7 @@ impl<K: Dim> Complex<K> {
             star_changed_at: vec![0; n_points],
             move_clock: 0,
             star_scratch: Vec::new(),
+            relabels: 0,
         };
         complex.reclassify_all();
         Ok(complex)
@@ -147,6 +148,7 @@ impl<K: Dim> Complex<K> {
     /// Relabels every cell with `f(cell centroid)` (used by initialisations).
     pub fn label_by(&mut self, mut f: impl FnMut(K::Point) -> Label) {
         let ids: Vec<CellId> = self.cell_ids().collect();
+        self.relabels += 1;
         for c in ids {
             let p = self.cell_points(c);
             let mut centroid = K::Point::zero();

@@ -55,6 +55,8 @@ pub struct Complex<K: Dim> {
     move_clock: u64,
     /// Scratch of [`Complex::set_position`].
     star_scratch: Vec<CellId>,
+    /// Counts the calls that changed labels.
+    relabels: u64,
 }
 
 /// A triangle complex.
@@ -288,6 +290,7 @@ impl<K: Dim> Complex<K> {
     /// Sets the label of one cell and reclassifies its vertices.
     pub fn set_label(&mut self, c: CellId, label: Label) {
         if self.labels[c.index()] != label {
+            self.relabels += 1;
             self.labels[c.index()] = label;
             self.reclassify_cells(&[c]);
         }
@@ -295,6 +298,7 @@ impl<K: Dim> Complex<K> {
 
     /// Sets many labels at once (one reclassification pass).
     pub fn set_labels(&mut self, changes: &[(CellId, Label)]) {
+        self.relabels += 1;
         for &(c, l) in changes {
             self.labels[c.index()] = l;
         }
@@ -334,6 +338,13 @@ impl<K: Dim> Complex<K> {
     /// whose [`star_changed_at`](Self::star_changed_at) is.
     pub fn move_clock(&self) -> u64 {
         self.move_clock
+    }
+
+    /// A counter of the calls that changed labels ([`set_label`](Self::set_label),
+    /// [`set_labels`](Self::set_labels), [`label_by`](Self::label_by)): a
+    /// result that depends on labels holds while it is unchanged.
+    pub fn relabels(&self) -> u64 {
+        self.relabels
     }
 
     /// The [`move_clock`](Self::move_clock) when the star of `v` last

@@ -91,6 +91,7 @@ impl Connectivity for D2 {
         _params: &DscParams,
         memo: &mut ImproveMemo,
     ) -> usize {
+        memo.sync(complex);
         flip_sweeps(complex, region, memo)
     }
 }
@@ -206,6 +207,13 @@ impl<K: Connectivity> Complex<K> {
         params: &DscParams,
         memo: &mut ImproveMemo,
     ) -> ImproveStats {
+        memo.sync(self);
+        memo.sync_thresholds([
+            params.degenerate_quality,
+            params.degenerate_measure,
+            params.degenerate_length,
+            params.edge_length,
+        ]);
         let mut stats = ImproveStats::default();
         let mut region = Region::around(seeds);
         let mut cells = Vec::new();
@@ -323,6 +331,7 @@ impl<K: Connectivity> Complex<K> {
 
     /// One Laplacian pass over the given vertices (interface vertices are skipped).
     pub fn smooth_vertices(&mut self, vertices: &[VertexId], memo: &mut ImproveMemo) -> usize {
+        memo.sync(self);
         let mut scratch = SmoothScratch::default();
         vertices
             .iter()

@@ -33,12 +33,44 @@ pub struct ImproveMemo {
     sound: Vec<Option<u64>>,
     /// Per cell (2D): when all of its edges were last found not to flip.
     settled: Vec<Option<Stamp>>,
+    /// What the verdicts were given: the complex's compactions (the ids)
+    /// and relabellings (the flip verdicts), the degenerate-cell thresholds
+    /// (the `sound` verdicts).
+    compactions: u64,
+    relabels: u64,
+    thresholds: [f64; 4],
 }
 
 impl ImproveMemo {
     /// An empty memo.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Forgets what no longer holds for `complex`: everything if it was
+    /// compacted since (the ids changed), the flip verdicts if a label
+    /// changed (an interface edge never flips). Every entry point of the
+    /// improvement calls it, so a memo may be kept across calls.
+    pub fn sync<K: Dim>(&mut self, complex: &Complex<K>) {
+        if complex.compactions() != self.compactions {
+            self.kept.clear();
+            self.sound.clear();
+            self.settled.clear();
+            self.compactions = complex.compactions();
+        }
+        if complex.relabels() != self.relabels {
+            self.settled.clear();
+            self.relabels = complex.relabels();
+        }
+    }
+
+    /// Forgets the degenerate-cell verdicts if they were given under other
+    /// thresholds (`thresholds`: whatever the caller judges degeneracy by).
+    pub(crate) fn sync_thresholds(&mut self, thresholds: [f64; 4]) {
+        if thresholds != self.thresholds {
+            self.sound.clear();
+            self.thresholds = thresholds;
+        }
     }
 
     /// Records that smoothing left `v` in place (`kept`) or moved it.
@@ -197,5 +229,39 @@ mod tests {
             assert_eq!(cells(&fresh), cells(&memoised), "round {round}");
         }
         assert!(total_flips > 20, "{total_flips} flips: too few to test");
+    }
+
+    /// A memo kept across calls forgets the flip verdicts when a label
+    /// changes (an interface edge never flips: its cells were settled
+    /// without testing it) and everything when the ids change.
+    #[test]
+    fn sync_forgets_what_labels_and_compactions_invalidate() {
+        let l = 4.0;
+        let mut mesh = Complex::<D2>::rectangle(40.0, 36.0, l).unwrap();
+        let params = DscParams::new::<D2>(l);
+        let mut memo = ImproveMemo::new();
+        let settled = |memo: &ImproveMemo, mesh: &Complex<D2>| {
+            mesh.cell_ids()
+                .filter(|&c| memo.quad_settled(mesh, c))
+                .count()
+        };
+        D2::improve_connectivity_in(&mut mesh, &mut Region::everything(), &params, &mut memo);
+        let all: Vec<VertexId> = mesh.vertex_ids().collect();
+        mesh.smooth_vertices(&all, &mut memo);
+        let before = settled(&memo, &mesh);
+        assert!(before > mesh.cell_count() / 2, "{before}");
+        memo.sync(&mesh);
+        assert_eq!(settled(&memo, &mesh), before, "nothing changed");
+        let c = mesh.cell_ids().next().unwrap();
+        mesh.set_label(c, 1);
+        memo.sync(&mesh);
+        assert_eq!(settled(&memo, &mesh), 0, "a label changed");
+        assert!(all.iter().any(|&v| memo.still_kept(&mesh, v)));
+        mesh.compact_in_place();
+        memo.sync(&mesh);
+        assert!(
+            !all.iter().any(|&v| memo.still_kept(&mesh, v)),
+            "the ids changed"
+        );
     }
 }

@@ -58,6 +58,40 @@ pub enum StopReason {
     Stopped,
 }
 
+/// The driver's second thread ([`SpinHelper`]): one if rayon may use more
+/// than one (`RAYON_NUM_THREADS=1` keeps a whole run on one thread, e.g.
+/// for instruction counts).
+#[derive(Debug)]
+struct Helper {
+    thread: SpinHelper,
+    inline: SpinHelper,
+}
+
+impl Helper {
+    fn new() -> Self {
+        let thread = if rayon::current_num_threads() > 1 {
+            SpinHelper::new()
+        } else {
+            SpinHelper::none()
+        };
+        Helper {
+            thread,
+            inline: SpinHelper::none(),
+        }
+    }
+
+    /// The helper, or none on one of rayon's worker threads: there the
+    /// helper's jobs (which may post rayon work) could wait for workers that
+    /// all wait for the helper (segmentations run by `par_iter`).
+    fn here(&self) -> &SpinHelper {
+        if rayon::current_thread_index().is_some() {
+            &self.inline
+        } else {
+            &self.thread
+        }
+    }
+}
+
 /// Seconds spent in each stage of the evolution.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct StageTimes {
@@ -65,7 +99,9 @@ pub struct StageTimes {
     pub setup: f64,
     /// Integrating the image over the cells.
     pub integrate: f64,
-    /// Label flips.
+    /// Label flips (on the driver's thread: a check of the rules that ran
+    /// beside the forces, see [`LabelRule::would_relabel`](super::model::LabelRule::would_relabel),
+    /// is in `forces`).
     pub flips: f64,
     /// Force computation.
     pub forces: f64,
@@ -122,7 +158,7 @@ pub struct Segmentation<'a, K: Raster> {
     /// Keeps the statistics of cells that did not move between iterations.
     cell_cache: CellCache<K>,
     /// The second thread of the short parallel sections of an iteration.
-    helper: SpinHelper,
+    helper: Helper,
     phases: PhaseStats,
     models: Models<K>,
     /// The force stage's fields, buffers and destinations.
@@ -218,8 +254,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         // Through the cache: the initialisation relabels cells but rarely
         // moves them, so the first step finds them integrated already.
         let mut cell_cache = CellCache::new();
-        let helper = SpinHelper::new();
-        cell_cache.integrate_on(&helper, &complex, &image, &mut cells);
+        let helper = Helper::new();
+        cell_cache.integrate_on(helper.here(), &complex, &image, &mut cells);
         let mut hints = if given {
             vec![None; params.phases]
         } else {
@@ -318,6 +354,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
 
     /// The models, to add, remove or change terms and rules mid-run.
     pub fn models_mut(&mut self) -> &mut Models<K> {
+        // (new rules may predict their flips again)
+        self.predict_flips = true;
         &mut self.models
     }
 
@@ -375,8 +413,12 @@ impl<'a, K: Raster> Segmentation<'a, K> {
 
     fn integrate(&mut self) {
         let t = Instant::now();
-        self.cell_cache
-            .integrate_on(&self.helper, &self.complex, &self.image, &mut self.cells);
+        self.cell_cache.integrate_on(
+            self.helper.here(),
+            &self.complex,
+            &self.image,
+            &mut self.cells,
+        );
         self.phases.update(&self.complex, &self.cells);
         self.times.integrate += t.elapsed().as_secs_f64();
     }
@@ -521,7 +563,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             &mut self.models.forces,
             &mut self.models.rules,
         );
-        let (computed, answers) = self.helper.join(
+        let (computed, answers) = self.helper.here().join(
             || force.run(terms, &input),
             || {
                 rules

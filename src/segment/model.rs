@@ -245,7 +245,9 @@ pub trait ForceTerm<K: Raster>: AsAny + Send {
     /// Called once per iteration, or twice when the label rules, checked
     /// beside this computation, turn out to change labels (the forces are
     /// then computed again on the new labels; see
-    /// [`LabelRule::would_relabel`]): the forces should be a function of `ctx`.
+    /// [`LabelRule::would_relabel`]), and so are [`kind`](Self::kind),
+    /// [`reference_magnitude`](Self::reference_magnitude) and
+    /// [`apply_to`](Self::apply_to): the forces should be a function of `ctx`.
     fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]);
 
     /// For a [`TermKind::Smoothing`] term whose direction is linear in the
@@ -312,6 +314,8 @@ pub trait LabelRule<K: Raster>: AsAny + Send {
     fn relabel(&mut self, ctx: &mut LabelContext<'_, '_, K>) -> usize;
     /// Whether [`relabel`](Self::relabel) would change a label now, decided
     /// without changing any; `None` (the default) if the rule cannot tell.
+    /// A rule that answers must have a `relabel` without any other effect
+    /// when it changes no label: the driver then skips it.
     ///
     /// Most iterations flip nothing. When every rule can tell, the driver
     /// asks them on its second thread while it computes the forces, and runs

@@ -427,3 +427,36 @@ fn predicted_flips_give_the_run_of_rules_run_every_iteration() {
         predicted.iter().map(|r| r.flips).collect::<Vec<_>>()
     );
 }
+
+/// Segmentations run by rayon's workers (e.g. many images through
+/// `par_iter`), all busy at once, finish, and give what a run on the main
+/// thread gives: the driver does not hand work to its helper thread there
+/// (the helper's share may itself wait for rayon's workers). A watchdog
+/// turns a hang into a failure.
+#[test]
+fn segmentations_on_rayon_workers_finish() {
+    use dsc_seg::dim::D2;
+    use dsc_seg::segment::{ImageView, SegmentParams, Segmentation};
+    use rayon::prelude::*;
+    let p = dsc_seg::phantom::shapes2d::four_phase(64, 0.2, 1);
+    let run = move || {
+        let image = ImageView::new_2d(p.width, p.height, &p.image).unwrap();
+        let mut params = SegmentParams::new(4);
+        params.max_iterations = 25;
+        let mut seg = Segmentation::<D2>::new(image, params).unwrap();
+        seg.run(|_| {});
+        seg.label_image()
+    };
+    let on_main = run();
+    let (send, receive) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        // As many segmentations as the global pool has workers, or more.
+        let n = 2 * rayon::current_num_threads();
+        let labels: Vec<Vec<u8>> = (0..n).into_par_iter().map(|_| run()).collect();
+        send.send(labels).unwrap();
+    });
+    let labels = receive
+        .recv_timeout(std::time::Duration::from_secs(120))
+        .expect("segmentations on rayon's workers did not finish");
+    assert!(labels.iter().all(|l| *l == on_main));
+}
