@@ -95,7 +95,7 @@ impl SpinHelper {
         if cores < 2 {
             return Self::none();
         }
-        Self::spawn().unwrap_or_else(|_| Self::none())
+        Self::with_thread().unwrap_or_else(|_| Self::none())
     }
 
     /// No helper thread: `join` runs both closures in turn.
@@ -106,7 +106,9 @@ impl SpinHelper {
         }
     }
 
-    fn spawn() -> std::io::Result<Self> {
+    /// A helper thread whatever the number of cores (e.g. for tests of the
+    /// two-thread path); an error if the thread cannot be started.
+    pub fn with_thread() -> std::io::Result<Self> {
         let shared = Arc::new(Shared {
             job: Mutex::new(None),
             posted: AtomicU64::new(0),
@@ -285,7 +287,7 @@ mod tests {
 
     #[test]
     fn join_returns_both_results_with_and_without_a_thread() {
-        for helper in [SpinHelper::spawn().unwrap(), SpinHelper::none()] {
+        for helper in [SpinHelper::with_thread().unwrap(), SpinHelper::none()] {
             let data: Vec<u64> = (0..10_000).collect();
             let (lo, hi) = data.split_at(5_000);
             for round in 0..200 {
@@ -297,7 +299,7 @@ mod tests {
 
     #[test]
     fn the_helper_writes_through_borrowed_slices() {
-        let helper = SpinHelper::spawn().unwrap();
+        let helper = SpinHelper::with_thread().unwrap();
         let mut out = vec![0u32; 1000];
         let (lo, hi) = out.split_at_mut(500);
         helper.join(
@@ -309,7 +311,7 @@ mod tests {
 
     #[test]
     fn a_join_inside_a_join_runs_on_the_caller() {
-        let helper = SpinHelper::spawn().unwrap();
+        let helper = SpinHelper::with_thread().unwrap();
         let outer = thread::current().id();
         let ((a, b), c) = helper.join(
             || helper.join(|| thread::current().id(), || thread::current().id()),
@@ -324,7 +326,7 @@ mod tests {
 
     #[test]
     fn a_parked_helper_wakes_for_the_next_job() {
-        let helper = SpinHelper::spawn().unwrap();
+        let helper = SpinHelper::with_thread().unwrap();
         helper.join(|| (), || ());
         thread::sleep(SPIN * 3);
         let (_, b) = helper.join(|| 1, || 2);
@@ -333,7 +335,7 @@ mod tests {
 
     #[test]
     fn panics_reach_the_caller_after_both_halves_finished() {
-        let helper = SpinHelper::spawn().unwrap();
+        let helper = SpinHelper::with_thread().unwrap();
         let finished = AtomicBool::new(false);
         let caught = catch_unwind(AssertUnwindSafe(|| {
             helper.join(

@@ -138,9 +138,90 @@ impl<K: Raster> CellCache<K> {
         image: &ImageView<'_>,
         out: &mut Vec<CellStats>,
     ) -> usize {
+        if helper.is_threaded() || complex.cell_capacity() >= 8 * PARALLEL_BATCH {
+            self.integrate_double_buffered(helper, complex, image, out)
+        } else {
+            self.integrate_in_place(complex, image, out)
+        }
+    }
+
+    /// On one thread: the entries are carried across a compaction in place
+    /// (forward moves), then checked and refreshed in place.
+    fn integrate_in_place(
+        &mut self,
+        complex: &Complex<K>,
+        image: &ImageView<'_>,
+        out: &mut Vec<CellStats>,
+    ) -> usize {
+        let key = (image.data.as_ptr() as usize, image.data.len());
+        let generation = complex.compactions();
+        if !self.continues(key, generation, out) {
+            self.corners.clear();
+            out.clear();
+            self.image = key;
+        } else if generation == self.generation + 1 {
+            let mut kept = 0;
+            let map = complex.last_cell_map();
+            for (old, new) in map.iter().enumerate().take(self.corners.len()) {
+                if let Some(new) = new {
+                    self.corners[new.index()] = self.corners[old];
+                    out[new.index()] = out[old];
+                    kept = new.index() + 1;
+                }
+            }
+            self.corners.truncate(kept);
+            out.truncate(kept);
+        }
+        self.generation = generation;
+        let cap = complex.cell_capacity();
+        out.resize(cap, CellStats::default());
+        self.corners.resize(cap, None);
+        let r = &mut self.halves[0];
+        r.changed.clear();
+        for (i, (k, s)) in self.corners.iter_mut().zip(out.iter_mut()).enumerate() {
+            let c = CellId(i as u32);
+            if !complex.is_alive(c) {
+                (*k, *s) = (None, CellStats::default());
+                continue;
+            }
+            let pts = complex.cell_points(c);
+            if k.is_some_and(|before| same_corners::<K>(&before, &pts)) {
+                continue;
+            }
+            *k = Some(pts);
+            r.changed.push((spatial_key::<K>(&pts), c));
+        }
+        r.changed.sort_unstable_by_key(|&(key, _)| key);
+        r.integrate::<K>(image, &self.corners, 0);
+        r.store(out, 0)
+    }
+
+    /// Whether the entries of the last call can be carried to this one:
+    /// the same image, `out` the vector that call filled, and at most one
+    /// compaction of the complex since.
+    fn continues(&self, key: (usize, usize), generation: u64, out: &[CellStats]) -> bool {
+        key == self.image
+            && out.len() == self.corners.len()
+            && generation >= self.generation
+            && generation <= self.generation + 1
+    }
+
+    /// With the helper (or rayon's threads, for a large complex): the last
+    /// call's entries are read from one pair of buffers while this call's
+    /// are written to the other, so that one pass carries them across a
+    /// compaction and finds the changed cells, in two halves.
+    fn integrate_double_buffered(
+        &mut self,
+        helper: &SpinHelper,
+        complex: &Complex<K>,
+        image: &ImageView<'_>,
+        out: &mut Vec<CellStats>,
+    ) -> usize {
+        let key = (image.data.as_ptr() as usize, image.data.len());
+        let continues = self.continues(key, complex.compactions(), out);
         std::mem::swap(&mut self.corners, &mut self.old_corners);
         std::mem::swap(out, &mut self.old_stats);
-        self.map_previous_ids(complex, image);
+        self.map_previous_ids(complex, key, continues);
         let cap = complex.cell_capacity();
         // Every entry is written by the scan below: no need to clear.
         out.resize(cap, CellStats::default());
@@ -190,20 +271,14 @@ impl<K: Raster> CellCache<K> {
     }
 
     /// Fills `previous_id`: each current cell id's id at the last call
-    /// (through the compaction since, if any), or [`NO_ENTRY`]. Forgets the
-    /// last call if the image changed or the complex went through anything
-    /// but at most one compaction.
-    fn map_previous_ids(&mut self, complex: &Complex<K>, image: &ImageView<'_>) {
-        let key = (image.data.as_ptr() as usize, image.data.len());
+    /// (through the compaction since, if any), or [`NO_ENTRY`] for every
+    /// cell unless the last call `continues` here.
+    fn map_previous_ids(&mut self, complex: &Complex<K>, key: (usize, usize), continues: bool) {
         let generation = complex.compactions();
         let known = self.old_corners.len();
         self.previous_id.clear();
         self.previous_id.resize(complex.cell_capacity(), NO_ENTRY);
-        if key != self.image
-            || self.old_stats.len() != known
-            || generation < self.generation
-            || generation > self.generation + 1
-        {
+        if !continues {
             self.image = key;
         } else if generation == self.generation + 1 {
             for (old, new) in complex.last_cell_map().iter().enumerate().take(known) {
@@ -554,16 +629,25 @@ mod tests {
         let mut mesh = Complex::<D2>::rectangle(w as f64, h as f64, l).unwrap();
         let params = DscParams::new::<D2>(l);
         // Both ways: on one thread, and shared with a helper thread.
-        let mut caches = [CellCache::<D2>::new(), CellCache::<D2>::new()];
-        let helpers = [SpinHelper::none(), SpinHelper::new()];
-        let mut integrate = |mesh: &Complex<D2>, cached: &mut [Vec<CellStats>; 2]| {
-            let [a, b] = cached;
+        // Three ways: on one thread (entries kept in place), shared with a
+        // helper thread (double-buffered), and switching between the two.
+        let mut caches = [(); 3].map(|_| CellCache::<D2>::new());
+        let helpers = [SpinHelper::none(), SpinHelper::with_thread().unwrap()];
+        let mut calls = 0;
+        let mut integrate = |mesh: &Complex<D2>, cached: &mut [Vec<CellStats>; 3]| {
+            let [a, b, c] = cached;
             let n = caches[0].integrate_on(&helpers[0], mesh, &image, a);
             assert_eq!(caches[1].integrate_on(&helpers[1], mesh, &image, b), n);
+            assert_eq!(
+                caches[2].integrate_on(&helpers[calls % 2], mesh, &image, c),
+                n
+            );
+            calls += 1;
             assert_eq!(a, b);
+            assert_eq!(a, c);
             n
         };
-        let mut cached = [Vec::new(), Vec::new()];
+        let mut cached = [Vec::new(), Vec::new(), Vec::new()];
         let mut full = Vec::new();
         let first = integrate(&mesh, &mut cached);
         integrate_cells(&mesh, &image, &mut full);
