@@ -58,6 +58,24 @@ pub enum StopReason {
     Stopped,
 }
 
+/// The force stage's inputs, borrowed from a segmentation's fields (a
+/// macro, so that the stage and the models stay free to borrow mutably).
+macro_rules! force_inputs {
+    ($s:expr, $iteration:expr) => {
+        ForceInputs {
+            complex: &$s.complex,
+            image: &$s.image,
+            phases: &$s.phases,
+            cells: &$s.cells,
+            params: &$s.params,
+            range: $s.range,
+            edge_length: $s.dsc.edge_length,
+            step: $s.step,
+            iteration: $iteration,
+        }
+    };
+}
+
 /// The driver's second thread ([`SpinHelper`]): one if rayon may use more
 /// than one (`RAYON_NUM_THREADS=1` keeps a whole run on one thread, e.g.
 /// for instruction counts).
@@ -538,17 +556,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// label ([`would_relabel`](super::model::LabelRule::would_relabel); a rule that cannot tell counts
     /// as yes, and turns these predictions off for the run).
     fn forces_beside_flip_check(&mut self, iteration: usize) -> ((f64, f64), bool) {
-        let input = ForceInputs {
-            complex: &self.complex,
-            image: &self.image,
-            phases: &self.phases,
-            cells: &self.cells,
-            params: &self.params,
-            range: self.range,
-            edge_length: self.dsc.edge_length,
-            step: self.step,
-            iteration,
-        };
+        let input = force_inputs!(self, iteration);
         let view = LabelView {
             complex: &self.complex,
             image: &self.image,
@@ -585,17 +593,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// destinations; returns the interface measure and the largest
     /// displacement (pixels).
     fn forces_and_destinations(&mut self, iteration: usize) -> (f64, f64) {
-        let input = ForceInputs {
-            complex: &self.complex,
-            image: &self.image,
-            phases: &self.phases,
-            cells: &self.cells,
-            params: &self.params,
-            range: self.range,
-            edge_length: self.dsc.edge_length,
-            step: self.step,
-            iteration,
-        };
+        let input = force_inputs!(self, iteration);
         self.force.run(&mut self.models.forces, &input)
     }
 
