@@ -412,53 +412,65 @@ fn accumulate((mut sum, mut sum_sq): (f64, f64), values: &[f32]) -> (f64, f64) {
     (sum, sum_sq)
 }
 
-/// Pixels of one cell [`cell_stats_pair`] gathers; larger cells are summed in place.
-pub const GATHER: usize = 256;
-
-/// Scratch space of [`cell_stats_pair`]: room for two cells' pixels.
-#[derive(Clone, Debug)]
-pub struct PairScratch(Vec<f32>);
-
-impl Default for PairScratch {
-    fn default() -> Self {
-        PairScratch(vec![0.0; 2 * GATHER])
-    }
-}
+/// Scratch space of [`cell_stats_pair`]: the two cells' row spans.
+#[derive(Clone, Debug, Default)]
+pub struct PairScratch(Vec<(usize, usize)>, Vec<(usize, usize)>);
 
 /// The statistics of two cells, each bit for bit what [`cell_stats`] gives.
 ///
 /// A cell's sums are chains of dependent additions (their order fixes the
 /// bits), so summing one cell waits on the adder's latency at every pixel.
-/// Here each cell's pixels are first copied, in order, into a buffer, and
-/// the two buffers are summed in one loop: two independent chains keep the
-/// adder busy. A cell with more than [`GATHER`] pixels is summed in place.
+/// Here the two cells' rows are summed side by side, row `k` of one with
+/// row `k` of the other: two independent chains keep the adder busy, each
+/// cell's pixels still in its own order.
 pub fn cell_stats_pair<K: Raster>(
     image: &ImageView<'_>,
     a: &[K::Point],
     b: &[K::Point],
     scratch: &mut PairScratch,
 ) -> [CellStats; 2] {
-    let (buf_a, buf_b) = scratch.0.split_at_mut(GATHER);
-    let (Some(na), Some(nb)) = (gather::<K>(image, a, buf_a), gather::<K>(image, b, buf_b)) else {
-        return [cell_stats::<K>(image, a), cell_stats::<K>(image, b)];
-    };
-    let (pa, pb) = (&buf_a[..na], &buf_b[..nb]);
-    let n = na.min(nb);
-    let (mut sa, mut qa, mut sb, mut qb) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
-    for (&x, &y) in pa[..n].iter().zip(&pb[..n]) {
-        let (x, y) = (x as f64, y as f64);
-        sa += x;
-        qa += x * x;
-        sb += y;
-        qb += y * y;
+    let PairScratch(rows_a, rows_b) = scratch;
+    for (rows, corners) in [(&mut *rows_a, a), (&mut *rows_b, b)] {
+        rows.clear();
+        K::cell_spans(image, corners, &mut |start, end| rows.push((start, end)));
     }
-    let (sa, qa) = accumulate((sa, qa), &pa[n..]);
-    let (sb, qb) = accumulate((sb, qb), &pb[n..]);
-    [(sa, qa, na), (sb, qb, nb)].map(|(sum, sum_sq, count)| CellStats {
-        sum,
-        sum_sq,
-        count: count as u32,
-    })
+    let data = image.data;
+    let (mut sa, mut qa, mut sb, mut qb) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    // Row k of each cell side by side (each cell's pixels still in order:
+    // its row k's tail is summed before its row k + 1).
+    for (&(a0, a1), &(b0, b1)) in rows_a.iter().zip(rows_b.iter()) {
+        let (ra, rb) = (&data[a0..a1], &data[b0..b1]);
+        let n = ra.len().min(rb.len());
+        for (&x, &y) in ra[..n].iter().zip(&rb[..n]) {
+            let (x, y) = (x as f64, y as f64);
+            sa += x;
+            qa += x * x;
+            sb += y;
+            qb += y * y;
+        }
+        (sa, qa) = accumulate((sa, qa), &ra[n..]);
+        (sb, qb) = accumulate((sb, qb), &rb[n..]);
+    }
+    let k = rows_a.len().min(rows_b.len());
+    for &(s, e) in &rows_a[k..] {
+        (sa, qa) = accumulate((sa, qa), &data[s..e]);
+    }
+    for &(s, e) in &rows_b[k..] {
+        (sb, qb) = accumulate((sb, qb), &data[s..e]);
+    }
+    let count = |rows: &[(usize, usize)]| rows.iter().map(|&(s, e)| e - s).sum::<usize>() as u32;
+    [
+        CellStats {
+            sum: sa,
+            sum_sq: qa,
+            count: count(rows_a),
+        },
+        CellStats {
+            sum: sb,
+            sum_sq: qb,
+            count: count(rows_b),
+        },
+    ]
 }
 
 /// Fills `out` (one or two entries) with the statistics of the cells with
@@ -483,27 +495,6 @@ fn fill_pair<K: Raster>(
             }
         }
     }
-}
-
-/// Copies the cell's pixels, in index order, to the front of `buf`;
-/// `None` if they do not fit.
-fn gather<K: Raster>(
-    image: &ImageView<'_>,
-    corners: &[K::Point],
-    buf: &mut [f32],
-) -> Option<usize> {
-    let mut n = 0;
-    let mut fits = true;
-    K::cell_spans(image, corners, &mut |start, end| {
-        let len = end - start;
-        if fits && n + len <= buf.len() {
-            buf[n..n + len].copy_from_slice(&image.data[start..end]);
-            n += len;
-        } else {
-            fits = false;
-        }
-    });
-    fits.then_some(n)
 }
 
 /// Per-phase totals and means.
@@ -573,7 +564,7 @@ mod tests {
     }
 
     /// Two cells summed together give, bit for bit, what each gives alone:
-    /// cells of unequal sizes, empty ones, and ones too large to gather.
+    /// cells of unequal sizes and row counts, empty ones, and large ones.
     #[test]
     fn pairs_sum_like_single_cells() {
         let (w, h) = (90usize, 70usize);
@@ -587,7 +578,7 @@ mod tests {
             state ^= state << 17;
             (state >> 11) as f64 / (1u64 << 53) as f64 * scale
         };
-        let mut gathered_too_large = false;
+        let mut saw_large = false;
         for _ in 0..5000 {
             let size = if rnd(1.0) < 0.1 { 60.0 } else { 8.0 };
             let mut tri = || -> Vec<Vector2<f64>> {
@@ -600,9 +591,9 @@ mod tests {
             let pair = cell_stats_pair::<D2>(&image, &a, &b, &mut scratch);
             let single = [cell_stats::<D2>(&image, &a), cell_stats::<D2>(&image, &b)];
             assert_eq!(pair, single, "{a:?} {b:?}");
-            gathered_too_large |= single.iter().any(|s| s.count as usize > GATHER);
+            saw_large |= single.iter().any(|s| s.count > 256);
         }
-        assert!(gathered_too_large);
+        assert!(saw_large);
     }
 
     /// A complex large enough for the parallel scan and integration.
