@@ -186,6 +186,22 @@ fn glue_facets<K: Dim>(cells: &[K::Cell]) -> Result<Vec<K::Neighbours>, BuildErr
     Ok(neighbours)
 }
 
+/// The vertices and inner triangles of a spade triangulation, numbered as
+/// spade numbers them.
+fn spade_arrays<T: Triangulation<Vertex = Point2<f64>>>(
+    t: &T,
+) -> (Vec<Vector2<f64>>, Vec<[VertexId; 3]>) {
+    let pos = t
+        .vertices()
+        .map(|v| Vector2::new(v.position().x, v.position().y))
+        .collect();
+    let cells = t
+        .inner_faces()
+        .map(|f| f.vertices().map(|v| VertexId(v.fix().index() as u32)))
+        .collect();
+    (pos, cells)
+}
+
 fn check_edge_length(l: f64, extent: f64) -> Result<(), BuildError> {
     if !(l.is_finite() && l > 0.0 && l <= extent) {
         return Err(BuildError::BadEdgeLength(l));
@@ -275,14 +291,7 @@ impl Complex<D2> {
             .keep_constraint_edges()
             .with_max_additional_vertices(2_000_000);
         cdt.refine(params);
-        let pos: Vec<Vector2<f64>> = cdt
-            .vertices()
-            .map(|v| Vector2::new(v.position().x, v.position().y))
-            .collect();
-        let cells: Vec<[VertexId; 3]> = cdt
-            .inner_faces()
-            .map(|f| f.vertices().map(|v| VertexId(v.fix().index() as u32)))
-            .collect();
+        let (pos, cells) = spade_arrays(&cdt);
         let labels = vec![0; cells.len()];
         let mut complex =
             Self::from_arrays(pos, cells, labels, (Vector2::zeros(), Vector2::new(w, h)))?;
@@ -477,10 +486,6 @@ mod tests {
         assert!(c.validate().is_empty());
     }
 
-    /// The direct construction is spade's Delaunay triangulation of the same
-    /// points, numbered the same way (so segmentations did not change when
-    /// it replaced the incremental insertion): even and odd row counts,
-    /// integer and fractional sizes, one column and many.
     /// spade's incremental Delaunay triangulation of points whose convex hull
     /// is the domain box (what [`Complex::rectangle`] used before).
     fn delaunay(points: &[Vector2<f64>], domain: (Vector2<f64>, Vector2<f64>)) -> Complex<D2> {
@@ -488,18 +493,15 @@ mod tests {
         for p in points {
             dt.insert(Point2::new(p.x, p.y)).unwrap();
         }
-        let pos = dt
-            .vertices()
-            .map(|v| Vector2::new(v.position().x, v.position().y))
-            .collect();
-        let cells: Vec<[VertexId; 3]> = dt
-            .inner_faces()
-            .map(|f| f.vertices().map(|v| VertexId(v.fix().index() as u32)))
-            .collect();
+        let (pos, cells) = spade_arrays(&dt);
         let labels = vec![0; cells.len()];
         Complex::from_arrays(pos, cells, labels, domain).unwrap()
     }
 
+    /// The direct construction is spade's Delaunay triangulation of the same
+    /// points, numbered the same way (so segmentations did not change when
+    /// it replaced the incremental insertion): even and odd row counts,
+    /// integer and fractional sizes, one column and many.
     #[test]
     fn rectangle_is_the_delaunay_triangulation_numbered_as_before() {
         let sizes: [f64; 9] = [2.0, 7.0, 8.0, 20.0, 31.5, 48.0, 63.0, 100.0, 129.25];

@@ -78,16 +78,10 @@ impl Flipper {
             self.flipped.clear();
             self.flipped.resize(image.len(), false);
         }
-        let rule = FlipRule {
-            image,
-            cells,
-            phases,
-            nu,
-            guard,
-        };
-        if !self.prepare(complex, &rule) {
+        let Some(rule) = self.prepare(complex, FlipRule::new(image, cells, phases, nu, guard))
+        else {
             return 0;
-        }
+        };
         let mut flips = 0;
         for i in 0..complex.cell_capacity() as u32 {
             let c = CellId(i);
@@ -122,16 +116,10 @@ impl Flipper {
         guard: bool,
         once: bool,
     ) -> bool {
-        let rule = FlipRule {
-            image,
-            cells,
-            phases,
-            nu,
-            guard,
-        };
-        if !self.prepare(complex, &rule) {
+        let Some(rule) = self.prepare(complex, FlipRule::new(image, cells, phases, nu, guard))
+        else {
             return false;
-        }
+        };
         (0..complex.cell_capacity() as u32).any(|i| {
             let c = CellId(i);
             self.target(complex, &rule, c).is_some()
@@ -140,9 +128,13 @@ impl Flipper {
     }
 
     /// Orders the known means and, for more than two phases, finds each
-    /// cell's pixel-dominant phase. `false`: fewer than two means are
-    /// known, nothing can flip.
-    fn prepare<K: Raster>(&mut self, complex: &Complex<K>, rule: &FlipRule<'_, '_>) -> bool {
+    /// cell's pixel-dominant phase; gives the rule back, or `None` if fewer
+    /// than two means are known (nothing can flip).
+    fn prepare<'r, 'a, K: Raster>(
+        &mut self,
+        complex: &Complex<K>,
+        rule: FlipRule<'r, 'a>,
+    ) -> Option<FlipRule<'r, 'a>> {
         self.order.clear();
         for (k, m) in rule.phases.mean.iter().enumerate() {
             if let Some(m) = *m {
@@ -150,7 +142,7 @@ impl Flipper {
             }
         }
         if self.order.len() < 2 {
-            return false;
+            return None;
         }
         self.dominant.clear();
         self.dominant.resize(complex.cell_capacity(), None);
@@ -191,7 +183,7 @@ impl Flipper {
                 }
             });
         }
-        true
+        Some(rule)
     }
 
     /// The label cell `c` flips to, given the labels as they are now (after
@@ -281,6 +273,24 @@ struct FlipRule<'r, 'a> {
     phases: &'r PhaseStats,
     nu: f64,
     guard: bool,
+}
+
+impl<'r, 'a> FlipRule<'r, 'a> {
+    fn new(
+        image: &'r ImageView<'a>,
+        cells: &'r [CellStats],
+        phases: &'r PhaseStats,
+        nu: f64,
+        guard: bool,
+    ) -> Self {
+        FlipRule {
+            image,
+            cells,
+            phases,
+            nu,
+            guard,
+        }
+    }
 }
 
 impl Flipper {
