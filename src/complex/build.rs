@@ -128,7 +128,7 @@ impl<K: Dim> Complex<K> {
             moved_at: vec![0; n_points],
             star_changed_at: vec![0; n_points],
             move_clock: 0,
-            star_scratch: Vec::new(),
+            spare_lists: Vec::new(),
             relabels: 0,
         };
         complex.reclassify_all();

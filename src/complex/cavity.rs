@@ -11,6 +11,11 @@
 use super::{CellId, Complex, Label, VertexId};
 use crate::dim::{Dim, Point};
 use serde::Serialize;
+use smallvec::SmallVec;
+
+/// The cavities of 2D flips and collapses, and of most 3D operations, fit
+/// these lists without a heap allocation.
+const INLINE: usize = 32;
 
 /// Why a local operation was not carried out. Rejections are normal control flow.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -62,11 +67,10 @@ fn rename_key(key: FacetKey, removed: VertexId, kept: VertexId) -> Option<FacetK
 /// Cavity-boundary facets that coincide after a rename: each pair is glued
 /// (returned as `(key, a, b)`) and taken out of the list; three or more, or two
 /// domain-boundary facets, cannot be glued.
-type Glued = Vec<(FacetKey, Option<CellId>, Option<CellId>)>;
-fn glue_coinciding(
-    outside: &mut Vec<(FacetKey, Option<CellId>, bool)>,
-) -> Result<Glued, Rejection> {
-    let mut glued = Vec::new();
+type Glued = SmallVec<[(FacetKey, Option<CellId>, Option<CellId>); 4]>;
+type Outside = SmallVec<[(FacetKey, Option<CellId>, bool); INLINE]>;
+fn glue_coinciding(outside: &mut Outside) -> Result<Glued, Rejection> {
+    let mut glued = Glued::new();
     let mut k = 0;
     while k + 1 < outside.len() {
         if outside[k].0 != outside[k + 1].0 {
@@ -111,15 +115,14 @@ impl<K: Dim> Complex<K> {
         })
     }
 
-    /// Replaces the cells `old` by `new`. On success the ids of the new cells are
-    /// appended to `created`. On rejection nothing changes.
+    /// Replaces the cells `old` by `new` (whose ids are the next ones, in
+    /// order). On rejection nothing changes.
     pub(crate) fn replace_cells(
         &mut self,
         old: &[CellId],
         new: &[(K::Cell, Label)],
-        created: &mut Vec<CellId>,
     ) -> Result<(), Rejection> {
-        self.replace_cells_merging(old, new, None, created)
+        self.replace_cells_merging(old, new, None)
     }
 
     /// [`replace_cells`](Self::replace_cells) for a collapse of `merge = (removed, kept)`:
@@ -133,7 +136,6 @@ impl<K: Dim> Complex<K> {
         old: &[CellId],
         new: &[(K::Cell, Label)],
         merge: Option<(VertexId, VertexId)>,
-        created: &mut Vec<CellId>,
     ) -> Result<(), Rejection> {
         if old.iter().any(|&c| !self.is_alive(c)) {
             return Err(Rejection::Stale);
@@ -142,8 +144,7 @@ impl<K: Dim> Complex<K> {
             return Err(Rejection::WouldInvert);
         }
         // Facets on the cavity boundary, with the cell outside (None: domain boundary).
-        let mut outside: Vec<(FacetKey, Option<CellId>, bool)> =
-            Vec::with_capacity(old.len() * K::NV);
+        let mut outside = Outside::new();
         for &c in old {
             for i in 0..K::NV {
                 let nb = self.neighbours(c)[i];
@@ -163,16 +164,18 @@ impl<K: Dim> Complex<K> {
         outside.sort_unstable_by_key(|e| e.0);
         let glued = glue_coinciding(&mut outside)?;
         // Facets of the new cells: (key, new cell index, local index).
-        let mut facets: Vec<(FacetKey, usize, usize)> = Vec::with_capacity(new.len() * K::NV);
+        let mut facets: SmallVec<[(FacetKey, usize, usize); INLINE]> = SmallVec::new();
         for (j, (cell, _)) in new.iter().enumerate() {
             for i in 0..K::NV {
                 facets.push((facet_key(cell.as_ref(), i), j, i));
             }
         }
         facets.sort_unstable_by_key(|e| e.0);
-        let mut links: Vec<K::Neighbours> = vec![K::no_neighbours(); new.len()];
+        let mut links: SmallVec<[K::Neighbours; INLINE]> =
+            SmallVec::from_elem(K::no_neighbours(), new.len());
         let base = self.cells.len() as u32;
-        let mut external: Vec<(usize, usize, usize)> = Vec::new(); // (new j, local i, outside index)
+        // (new j, local i, outside index)
+        let mut external: SmallVec<[(usize, usize, usize); INLINE]> = SmallVec::new();
         let mut k = 0;
         while k < facets.len() {
             let mut end = k + 1;
@@ -241,7 +244,6 @@ impl<K: Dim> Complex<K> {
             self.labels.push(*label);
             self.alive.push(true);
             self.mark_star_changed(id);
-            created.push(id);
             for &v in cell.as_ref() {
                 if self.vertex_cell[v.index()].is_none() {
                     self.live_vertices += 1;
@@ -267,8 +269,8 @@ impl<K: Dim> Complex<K> {
                 }
             }
         }
-        let start = created.len() - new.len();
-        let fresh: Vec<CellId> = created[start..].to_vec();
+        let fresh: SmallVec<[CellId; INLINE]> =
+            (base..base + new.len() as u32).map(CellId).collect();
         self.reclassify_cells(&fresh);
         Ok(())
     }

@@ -53,8 +53,10 @@ pub struct Complex<K: Dim> {
     star_changed_at: Vec<u64>,
     /// Counts vertex moves and creations and cell replacements.
     move_clock: u64,
-    /// Scratch of [`Complex::set_position`].
-    star_scratch: Vec<CellId>,
+    /// Cleared lists that operations borrow ([`Complex::take_list`]), so
+    /// that a move, flip, collapse or split allocates nothing once they
+    /// have grown.
+    spare_lists: Vec<Vec<CellId>>,
     /// Counts the calls that changed labels.
     relabels: u64,
 }
@@ -313,12 +315,24 @@ impl<K: Dim> Complex<K> {
         self.move_clock += 1;
         self.moved_at[v.index()] = self.move_clock;
         // Every vertex sharing a cell with `v` has a changed star.
-        let mut star = std::mem::take(&mut self.star_scratch);
+        let mut star = self.take_list();
         self.star_into(v, &mut star);
         for &c in &star {
             self.mark_star_changed(c);
         }
-        self.star_scratch = star;
+        self.give_back(star);
+    }
+
+    /// An empty list of cells from the spares (a new one if none is left);
+    /// [`give_back`](Self::give_back) returns it.
+    pub(crate) fn take_list(&mut self) -> Vec<CellId> {
+        self.spare_lists.pop().unwrap_or_default()
+    }
+
+    /// Returns a list taken by [`take_list`](Self::take_list) to the spares.
+    pub(crate) fn give_back(&mut self, mut list: Vec<CellId>) {
+        list.clear();
+        self.spare_lists.push(list);
     }
 
     /// Records that the stars of `c`'s corners changed now.

@@ -2,11 +2,11 @@
 
 use super::improve::ImproveStats;
 use super::resize::ResizeStats;
-use super::{Connectivity, DscParams};
-use crate::complex::{Complex, VertexId};
+use super::{Connectivity, DscParams, DscWorkspace};
+use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::Dim;
 use crate::dim::Point;
-use crate::ops::{CollapseMode, ImproveMemo, MoveOutcome};
+use crate::ops::{CollapseMode, MoveOutcome};
 use serde::Serialize;
 
 /// Destinations for some vertices, indexed by vertex id.
@@ -71,19 +71,37 @@ impl<K: Connectivity> Complex<K> {
     /// arrived or `max_rounds` is reached; then the mesh is resized and improved,
     /// and finally compacted (ids held from before the call are invalid after it).
     pub fn deform(&mut self, destinations: &Destinations<K>, params: &DscParams) -> DeformReport {
+        self.deform_with(destinations, params, &mut DscWorkspace::new())
+    }
+
+    /// [`deform`](Self::deform) with a workspace kept across calls (as the
+    /// segmentation does, once per iteration): the same result, without
+    /// allocating once the workspace's buffers have grown.
+    pub fn deform_with(
+        &mut self,
+        destinations: &Destinations<K>,
+        params: &DscParams,
+        ws: &mut DscWorkspace<K>,
+    ) -> DeformReport {
         let mut report = DeformReport::default();
         let tol = params.tolerance();
-        let mut star = Vec::new();
-        let mut pending: Vec<VertexId> = (0..destinations.targets.len() as u32)
-            .map(VertexId)
-            .filter(|&v| destinations.get(v).is_some() && self.is_vertex_alive(v))
-            .collect();
+        let mut pending = std::mem::take(&mut ws.pending);
+        let mut movers = std::mem::take(&mut ws.movers);
+        let mut touched = std::mem::take(&mut ws.touched);
+        let mut star = std::mem::take(&mut ws.star);
+        pending.clear();
+        pending.extend(
+            (0..destinations.targets.len() as u32)
+                .map(VertexId)
+                .filter(|&v| destinations.get(v).is_some() && self.is_vertex_alive(v)),
+        );
         let requested = pending.len();
-        let mut touched = pending.clone();
-        let mut memo = ImproveMemo::new();
+        touched.clear();
+        touched.extend_from_slice(&pending);
         while !pending.is_empty() && report.rounds < params.max_rounds {
             report.rounds += 1;
-            let movers = pending.clone();
+            movers.clear();
+            movers.extend_from_slice(&pending);
             pending.retain(|&v| {
                 if !self.is_vertex_alive(v) {
                     return false;
@@ -99,20 +117,21 @@ impl<K: Connectivity> Complex<K> {
                     MoveOutcome::Partial(_) | MoveOutcome::Blocked => true,
                 }
             });
-            report.snapped += self.snap_to_border(&mut pending, destinations, params);
+            report.snapped += self.snap_to_border(&mut pending, destinations, params, &mut star);
             add(
                 &mut report.improve,
-                self.improve_near_with(&movers, params, &mut memo),
+                self.improve_near_with(&movers, params, ws),
             );
         }
         report.stopped_short = requested - report.arrived - report.snapped;
-        report.resize = self.resize(params, &mut touched);
+        report.resize = self.resize_with(params, &mut touched, &mut ws.edges);
         touched.retain(|&v| self.is_vertex_alive(v));
         add(
             &mut report.improve,
-            self.improve_near_with(&touched, params, &mut memo),
+            self.improve_near_with(&touched, params, ws),
         );
         self.compact_in_place();
+        (ws.pending, ws.movers, ws.touched, ws.star) = (pending, movers, touched, star);
         report
     }
 }
@@ -129,10 +148,10 @@ impl<K: Connectivity> Complex<K> {
         pending: &mut Vec<VertexId>,
         destinations: &Destinations<K>,
         params: &DscParams,
+        star: &mut Vec<CellId>,
     ) -> usize {
         let reach = params.min_length * params.edge_length;
         let (lo, hi) = self.domain();
-        let mut star = Vec::new();
         let mut snapped = 0;
         pending.retain(|&v| {
             if !self.is_vertex_alive(v) {
@@ -158,9 +177,9 @@ impl<K: Connectivity> Complex<K> {
                 }
             }
             let Some(face) = face else { return true };
-            self.star_into(v, &mut star);
+            self.star_into(v, star);
             let mut best: Option<(f64, VertexId)> = None;
-            for &c in &star {
+            for &c in star.iter() {
                 for &w in self.cell(c) {
                     let class = self.class(w);
                     if w != v && class.boundary & face != 0 && !class.on_interface() {

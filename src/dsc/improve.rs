@@ -1,10 +1,12 @@
 //! Mesh improvement between moves: smoothing, flips, removal of degenerate cells.
 
-use super::DscParams;
+use super::workspace::{RegionBuffers, WalkScratch};
+use super::{DscParams, DscWorkspace};
 use crate::complex::{CellId, Complex, Rejection, VertexId};
 use crate::dim::{Dim, D2, D3};
 use crate::ops::{edge_settled, CollapseMode, ImproveMemo, SmoothScratch};
 use serde::Serialize;
+use smallvec::SmallVec;
 
 /// The dimension-specific connectivity improvement (2D edge flips, 3D flips).
 pub trait Connectivity: Dim {
@@ -35,18 +37,22 @@ pub trait Connectivity: Dim {
 pub struct Region<'s> {
     /// `None`: every live cell, in id order.
     seeds: Option<&'s [VertexId]>,
-    cells: Vec<CellId>,
-    marks: Vec<bool>,
+    buffers: RegionBuffers,
     current: bool,
 }
 
 impl<'s> Region<'s> {
     /// The cells around `seeds`.
     pub fn around(seeds: &'s [VertexId]) -> Self {
+        Self::around_in(seeds, RegionBuffers::default())
+    }
+
+    /// The cells around `seeds`, collected into `buffers` (given back by
+    /// [`into_buffers`](Self::into_buffers)).
+    pub fn around_in(seeds: &'s [VertexId], buffers: RegionBuffers) -> Self {
         Region {
             seeds: Some(seeds),
-            cells: Vec::new(),
-            marks: Vec::new(),
+            buffers,
             current: false,
         }
     }
@@ -55,8 +61,7 @@ impl<'s> Region<'s> {
     pub fn everything() -> Self {
         Region {
             seeds: None,
-            cells: Vec::new(),
-            marks: Vec::new(),
+            buffers: RegionBuffers::default(),
             current: false,
         }
     }
@@ -64,21 +69,29 @@ impl<'s> Region<'s> {
     /// The cells, collected again unless they are current.
     pub fn cells<K: Connectivity>(&mut self, complex: &Complex<K>) -> &[CellId] {
         if !self.current {
+            let b = &mut self.buffers;
             match self.seeds {
-                Some(seeds) => complex.region_cells(seeds, &mut self.cells, &mut self.marks),
+                Some(seeds) => {
+                    complex.region_cells_with(seeds, &mut b.cells, &mut b.marks, &mut b.star)
+                }
                 None => {
-                    self.cells.clear();
-                    self.cells.extend(complex.cell_ids());
+                    b.cells.clear();
+                    b.cells.extend(complex.cell_ids());
                 }
             }
             self.current = true;
         }
-        &self.cells
+        &self.buffers.cells
     }
 
     /// Marks the cells stale: the connectivity changed.
     pub fn invalidate(&mut self) {
         self.current = false;
+    }
+
+    /// The buffers, for the next region.
+    pub fn into_buffers(self) -> RegionBuffers {
+        self.buffers
     }
 }
 
@@ -195,69 +208,92 @@ impl<K: Connectivity> Complex<K> {
     /// deform loop passes the vertices it moved, so the cost follows the
     /// interface, not the mesh.
     pub fn improve_near(&mut self, seeds: &[VertexId], params: &DscParams) -> ImproveStats {
-        self.improve_near_with(seeds, params, &mut ImproveMemo::new())
+        self.improve_near_with(seeds, params, &mut DscWorkspace::new())
     }
 
-    /// [`improve_near`](Self::improve_near) remembering, in `memo`, the
-    /// vertices smoothing leaves in place (for the next calls before the
-    /// complex is compacted).
+    /// [`improve_near`](Self::improve_near) with a workspace kept across
+    /// calls: its memo remembers what the improvement verified (see
+    /// [`ImproveMemo`]), and its buffers are reused.
     pub fn improve_near_with(
         &mut self,
         seeds: &[VertexId],
         params: &DscParams,
-        memo: &mut ImproveMemo,
+        ws: &mut DscWorkspace<K>,
     ) -> ImproveStats {
-        memo.sync(self);
-        memo.sync_thresholds([
+        ws.memo.sync(self);
+        ws.memo.sync_thresholds([
             params.degenerate_quality,
             params.degenerate_measure,
             params.degenerate_length,
             params.edge_length,
         ]);
         let mut stats = ImproveStats::default();
-        let mut region = Region::around(seeds);
-        let mut cells = Vec::new();
-        let mut marks = Vec::new();
-        let mut vertices = Vec::new();
-        self.region_vertices(region.cells(self), &mut vertices, &mut marks);
-        stats.smoothed += self.smooth_vertices(&vertices, memo);
-        stats.flips += K::improve_connectivity_in(self, &mut region, params, memo);
-        cells.extend_from_slice(region.cells(self));
-        let (safe, unsafe_, splits) = if self.degenerate_near(&cells, params, memo) {
-            marks.clear();
-            marks.resize(self.cell_capacity(), false);
-            for &c in &cells {
-                marks[c.index()] = true;
-            }
-            self.grow_region(&mut cells, &mut marks);
-            self.remove_degenerate_in(&cells, params)
-        } else {
-            (0, 0, 0)
-        };
+        let mut region = Region::around_in(seeds, std::mem::take(&mut ws.region));
+        let cells = region.cells(self);
+        self.region_vertices(cells, &mut ws.vertices, &mut ws.walk.vertex_marks);
+        stats.smoothed += self.smooth_vertices_with(&ws.vertices, &mut ws.memo, &mut ws.smooth);
+        stats.flips += K::improve_connectivity_in(self, &mut region, params, &mut ws.memo);
+        let (safe, unsafe_, splits) = self.remove_degenerate_around(&mut region, params, ws);
         if safe + unsafe_ + splits > 0 {
             region.invalidate();
         }
         stats.safe_collapses += safe;
         stats.unsafe_collapses += unsafe_;
         stats.degenerate_splits += splits;
-        stats.flips += K::improve_connectivity_in(self, &mut region, params, memo);
-        stats.smoothed += self.smooth_vertices(&vertices, memo);
+        stats.flips += K::improve_connectivity_in(self, &mut region, params, &mut ws.memo);
+        stats.smoothed += self.smooth_vertices_with(&ws.vertices, &mut ws.memo, &mut ws.smooth);
+        ws.region = region.into_buffers();
         stats
+    }
+
+    /// Removes the degenerate cells of `region` grown by one ring, if the
+    /// memo does not show that there are none; returns the (safe, unsafe,
+    /// split) counts.
+    fn remove_degenerate_around(
+        &mut self,
+        region: &mut Region,
+        params: &DscParams,
+        ws: &mut DscWorkspace<K>,
+    ) -> (usize, usize, usize) {
+        let cells = &mut ws.grown;
+        cells.clear();
+        cells.extend_from_slice(region.cells(self));
+        if !self.degenerate_near(cells, params, &mut ws.memo, &mut ws.walk) {
+            return (0, 0, 0);
+        }
+        let marks = &mut ws.grown_marks;
+        marks.clear();
+        marks.resize(self.cell_capacity(), false);
+        for &c in cells.iter() {
+            marks[c.index()] = true;
+        }
+        self.grow_region(cells, marks, &mut ws.walk);
+        self.remove_degenerate_with(cells, params, &mut ws.walk)
     }
 
     /// The live cells around `seeds` (the union of their stars, each cell
     /// once): only there can a move have spoilt the mesh. `marks` is scratch.
     pub fn region_cells(&self, seeds: &[VertexId], out: &mut Vec<CellId>, marks: &mut Vec<bool>) {
+        self.region_cells_with(seeds, out, marks, &mut Vec::new());
+    }
+
+    /// [`region_cells`](Self::region_cells) with a scratch star.
+    fn region_cells_with(
+        &self,
+        seeds: &[VertexId],
+        out: &mut Vec<CellId>,
+        marks: &mut Vec<bool>,
+        star: &mut Vec<CellId>,
+    ) {
         out.clear();
         marks.clear();
         marks.resize(self.cell_capacity(), false);
-        let mut star = Vec::new();
         for &v in seeds {
             if !self.is_vertex_alive(v) {
                 continue;
             }
-            self.star_into(v, &mut star);
-            for &c in &star {
+            self.star_into(v, star);
+            for &c in star.iter() {
                 if !marks[c.index()] {
                     marks[c.index()] = true;
                     out.push(c);
@@ -276,17 +312,15 @@ impl<K: Connectivity> Complex<K> {
         cells: &[CellId],
         params: &DscParams,
         memo: &mut ImproveMemo,
+        walk: &mut WalkScratch,
     ) -> bool {
-        let mut vertices = Vec::new();
-        let mut vmarks = Vec::new();
-        self.region_vertices(cells, &mut vertices, &mut vmarks);
-        let mut star = Vec::new();
-        for &v in &vertices {
+        self.region_vertices(cells, &mut walk.vertices, &mut walk.vertex_marks);
+        for &v in &walk.vertices {
             if memo.still_sound(self, v) {
                 continue;
             }
-            self.star_into(v, &mut star);
-            if star.iter().any(|&c| self.is_degenerate(c, params)) {
+            self.star_into(v, &mut walk.star);
+            if walk.star.iter().any(|&c| self.is_degenerate(c, params)) {
                 return true;
             }
             memo.set_sound(self, v);
@@ -297,15 +331,12 @@ impl<K: Connectivity> Complex<K> {
     /// The region grown by one ring: every cell sharing a vertex with `cells`.
     /// Squeezed cells between two meeting fronts need not touch a vertex that
     /// moved in this round, but they always touch one that shares a cell with it.
-    fn grow_region(&self, cells: &mut Vec<CellId>, marks: &mut Vec<bool>) {
+    fn grow_region(&self, cells: &mut Vec<CellId>, marks: &mut Vec<bool>, walk: &mut WalkScratch) {
         marks.resize(self.cell_capacity(), false);
-        let mut vertices = Vec::new();
-        let mut vmarks = Vec::new();
-        self.region_vertices(cells, &mut vertices, &mut vmarks);
-        let mut star = Vec::new();
-        for &v in &vertices {
-            self.star_into(v, &mut star);
-            for &c in &star {
+        self.region_vertices(cells, &mut walk.vertices, &mut walk.vertex_marks);
+        for &v in &walk.vertices {
+            self.star_into(v, &mut walk.star);
+            for &c in &walk.star {
                 if !marks[c.index()] {
                     marks[c.index()] = true;
                     cells.push(c);
@@ -331,11 +362,20 @@ impl<K: Connectivity> Complex<K> {
 
     /// One Laplacian pass over the given vertices (interface vertices are skipped).
     pub fn smooth_vertices(&mut self, vertices: &[VertexId], memo: &mut ImproveMemo) -> usize {
+        self.smooth_vertices_with(vertices, memo, &mut SmoothScratch::default())
+    }
+
+    /// [`smooth_vertices`](Self::smooth_vertices) with reused scratch space.
+    fn smooth_vertices_with(
+        &mut self,
+        vertices: &[VertexId],
+        memo: &mut ImproveMemo,
+        scratch: &mut SmoothScratch<K>,
+    ) -> usize {
         memo.sync(self);
-        let mut scratch = SmoothScratch::default();
         vertices
             .iter()
-            .filter(|&&v| self.smooth_vertex(v, &mut scratch, memo))
+            .filter(|&&v| self.smooth_vertex(v, scratch, memo))
             .count()
     }
 
@@ -375,12 +415,24 @@ impl<K: Connectivity> Complex<K> {
         cells: &[CellId],
         params: &DscParams,
     ) -> (usize, usize, usize) {
+        self.remove_degenerate_with(cells, params, &mut WalkScratch::default())
+    }
+
+    /// [`remove_degenerate_in`](Self::remove_degenerate_in) with reused scratch space.
+    fn remove_degenerate_with(
+        &mut self,
+        cells: &[CellId],
+        params: &DscParams,
+        walk: &mut WalkScratch,
+    ) -> (usize, usize, usize) {
         let straight_cos = params.straight_angle_deg.to_radians().cos();
         let (mut safe, mut unsafe_, mut splits) = (0, 0, 0);
         // A worklist: a collapse reshapes the star of the vertex it keeps, so
         // that star is checked again; the budget bounds pathological cascades.
-        let mut work: Vec<CellId> = cells.to_vec();
-        let mut star = Vec::new();
+        let work = &mut walk.work;
+        work.clear();
+        work.extend_from_slice(cells);
+        let star = &mut walk.star;
         let mut budget = 4 * cells.len() + 16;
         while let Some(c) = work.pop() {
             if budget == 0 {
@@ -390,7 +442,7 @@ impl<K: Connectivity> Complex<K> {
             if !self.is_alive(c) || !self.is_degenerate(c, params) {
                 continue;
             }
-            let touched = match self.collapse_cell(c, params, straight_cos) {
+            let touched = match self.collapse_cell(c, params, straight_cos, star) {
                 Some((mode, kept)) => {
                     match mode {
                         CollapseMode::Safe => safe += 1,
@@ -416,29 +468,31 @@ impl<K: Connectivity> Complex<K> {
                 }
                 None => continue,
             };
-            self.star_into(touched, &mut star);
-            work.extend_from_slice(&star);
+            self.star_into(touched, star);
+            work.extend_from_slice(star);
         }
         (safe, unsafe_, splits)
     }
 
     /// Tries to collapse one edge of `c`, shortest first, safe before unsafe.
+    /// `star` is scratch.
     fn collapse_cell(
         &mut self,
         c: CellId,
         params: &DscParams,
         straight_cos: f64,
+        star: &mut Vec<CellId>,
     ) -> Option<(CollapseMode, VertexId)> {
-        let edges = self.edges_by_length(c);
+        let edges = self.sorted_edges(c);
         // Where degenerate cells cluster, a collapse that removes one may leave
         // the surviving neighbours below the degenerate quality; it is still
         // accepted if it makes no surviving cell worse than the worst one there.
-        let bounds: Vec<f64> = edges
+        let bounds: SmallVec<[f64; 6]> = edges
             .iter()
             .map(|&(u, v)| {
                 params
                     .degenerate_quality
-                    .min(self.worst_surviving_quality(u, v))
+                    .min(self.worst_surviving_quality(u, v, star))
             })
             .collect();
         for mode in [CollapseMode::Safe, CollapseMode::Unsafe] {
@@ -454,13 +508,12 @@ impl<K: Connectivity> Complex<K> {
     }
 
     /// Worst quality of the cells around `u` or `v` that do not contain the edge
-    /// `uv` (the cells a collapse of `uv` keeps, reshaped).
-    fn worst_surviving_quality(&self, u: VertexId, v: VertexId) -> f64 {
-        let mut star = Vec::new();
+    /// `uv` (the cells a collapse of `uv` keeps, reshaped). `star` is scratch.
+    fn worst_surviving_quality(&self, u: VertexId, v: VertexId, star: &mut Vec<CellId>) -> f64 {
         let mut worst: f64 = 1.0;
         for w in [u, v] {
-            self.star_into(w, &mut star);
-            for &c in &star {
+            self.star_into(w, star);
+            for &c in star.iter() {
                 let cell = self.cell(c);
                 if !(cell.contains(&u) && cell.contains(&v)) {
                     worst = worst.min(self.quality(c));
@@ -506,10 +559,10 @@ mod tests {
             for &c in &grown {
                 marks[c.index()] = true;
             }
-            mesh.grow_region(&mut grown, &mut marks);
+            mesh.grow_region(&mut grown, &mut marks, &mut WalkScratch::default());
             let fresh = grown.iter().any(|&c| mesh.is_degenerate(c, &params));
             assert_eq!(
-                mesh.degenerate_near(&cells, &params, &mut memo),
+                mesh.degenerate_near(&cells, &params, &mut memo, &mut WalkScratch::default()),
                 fresh,
                 "round {round}"
             );

@@ -8,7 +8,9 @@ mod deform;
 mod improve;
 mod params;
 mod resize;
+mod workspace;
 
 pub use deform::{DeformReport, Destinations};
 pub use improve::{Connectivity, Region};
 pub use params::{DscParams, ParamError};
+pub use workspace::{DscWorkspace, RegionBuffers};

@@ -26,11 +26,21 @@ impl<K: Connectivity> Complex<K> {
     /// collapses small cells. The vertices it creates or moves are appended to
     /// `touched`, so that the caller can improve the mesh around them.
     pub fn resize(&mut self, params: &DscParams, touched: &mut Vec<VertexId>) -> ResizeStats {
+        self.resize_with(params, touched, &mut Vec::new())
+    }
+
+    /// [`resize`](Self::resize) listing the interface edges into `edges` (scratch).
+    pub(super) fn resize_with(
+        &mut self,
+        params: &DscParams,
+        touched: &mut Vec<VertexId>,
+        edges: &mut Vec<(VertexId, VertexId)>,
+    ) -> ResizeStats {
         let mut stats = ResizeStats::default();
         let l = params.edge_length;
         let straight_cos = params.straight_angle_deg.to_radians().cos();
-        let mut edges = self.interface_edges();
-        for &(u, v) in &edges {
+        self.interface_edges_into(edges);
+        for &(u, v) in edges.iter() {
             if self
                 .edge_length_if_alive(u, v)
                 .is_some_and(|len| len > params.max_length * l)
@@ -44,9 +54,9 @@ impl<K: Connectivity> Complex<K> {
         // A failed split leaves the cells as they were: without splits the
         // interface edges stand.
         if stats.interface_splits > 0 {
-            edges = self.interface_edges();
+            self.interface_edges_into(edges);
         }
-        for (u, v) in edges {
+        for &(u, v) in edges.iter() {
             if self
                 .edge_length_if_alive(u, v)
                 .is_some_and(|len| len < params.min_length * l)
@@ -88,6 +98,13 @@ impl<K: Connectivity> Complex<K> {
     /// Every edge lying in an interface facet, each once.
     pub fn interface_edges(&self) -> Vec<(VertexId, VertexId)> {
         let mut edges = Vec::new();
+        self.interface_edges_into(&mut edges);
+        edges
+    }
+
+    /// [`interface_edges`](Self::interface_edges) into `edges` (cleared first).
+    pub fn interface_edges_into(&self, edges: &mut Vec<(VertexId, VertexId)>) {
+        edges.clear();
         for c in self.cell_ids() {
             let cell = self.cell(c);
             for i in 0..K::NV {
@@ -109,7 +126,6 @@ impl<K: Connectivity> Complex<K> {
         }
         edges.sort_unstable();
         edges.dedup();
-        edges
     }
 
     fn edge_length_if_alive(&self, u: VertexId, v: VertexId) -> Option<f64> {

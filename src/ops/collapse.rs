@@ -15,6 +15,7 @@
 
 use crate::complex::{CellId, Complex, Label, Rejection, VertexId, VertexKind};
 use crate::dim::{Dim, Point};
+use smallvec::SmallVec;
 
 /// Whether a collapse must preserve the interface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,35 +49,57 @@ impl<K: Dim> Complex<K> {
         if u == v || !self.is_vertex_alive(u) || !self.is_vertex_alive(v) {
             return Err(Rejection::Stale);
         }
-        let mut star_u = Vec::new();
-        let mut star_v = Vec::new();
-        self.star_into(u, &mut star_u);
-        self.star_into(v, &mut star_v);
-        let edge_cells: Vec<CellId> = star_u
-            .iter()
-            .copied()
-            .filter(|&c| self.cell(c).contains(&v))
-            .collect();
+        let mut lists = [(); 4].map(|_| self.take_list());
+        let result = self.collapse_edge_with(u, v, mode, min_quality, straight_cos, &mut lists);
+        for list in lists {
+            self.give_back(list);
+        }
+        result
+    }
+
+    /// [`collapse_edge`](Self::collapse_edge) with four empty lists for the
+    /// stars of `u` and `v`, the cells of the edge, and other stars.
+    fn collapse_edge_with(
+        &mut self,
+        u: VertexId,
+        v: VertexId,
+        mode: CollapseMode,
+        min_quality: f64,
+        straight_cos: f64,
+        lists: &mut [Vec<CellId>; 4],
+    ) -> Result<VertexId, Rejection> {
+        let [star_u, star_v, edge_cells, star] = lists;
+        self.star_into(u, star_u);
+        self.star_into(v, star_v);
+        edge_cells.extend(
+            star_u
+                .iter()
+                .copied()
+                .filter(|&c| self.cell(c).contains(&v)),
+        );
         if edge_cells.is_empty() {
             return Err(Rejection::Stale);
         }
-        self.check_link(u, v, &star_u, &star_v, &edge_cells)?;
+        self.check_link(u, v, star_u, star_v, edge_cells)?;
         let (cu, cv) = (self.class(u), self.class(v));
-        let interface_edge = self.edge_on_interface(u, v, &edge_cells);
+        let interface_edge = self.edge_on_interface(u, v, edge_cells);
         if mode == CollapseMode::Safe && cu.on_interface() && cv.on_interface() && !interface_edge {
             return Err(Rejection::Constrained);
         }
         let (pu, pv) = (self.position(u), self.position(v));
-        let free = |w: VertexId| -> bool {
+        let mut free = |w: VertexId| -> bool {
             match self.class(w).kind {
                 VertexKind::Interior => true,
                 _ if mode == CollapseMode::Unsafe => true,
-                VertexKind::Interface => interface_edge && self.interface_is_flat(w, straight_cos),
+                VertexKind::Interface => {
+                    interface_edge && self.interface_is_flat(w, straight_cos, star)
+                }
                 VertexKind::Junction => false,
             }
         };
         let (free_u, free_v) = (free(u), free(v));
-        let mut candidates: Vec<(f64, Candidate<K::Point>)> = Vec::with_capacity(6);
+        // At most three positions times two choices of the kept end.
+        let mut candidates: SmallVec<[(f64, Candidate<K::Point>); 6]> = SmallVec::new();
         for at in [pu, pv, (pu + pv) * 0.5] {
             let on_faces = self.boundary_mask(&at);
             if on_faces & cu.boundary != cu.boundary || on_faces & cv.boundary != cv.boundary {
@@ -86,7 +109,7 @@ impl<K: Dim> Complex<K> {
                 continue;
             }
             for (keep, remove, star_keep, star_remove) in
-                [(u, v, &star_u, &star_v), (v, u, &star_v, &star_u)]
+                [(u, v, &*star_u, &*star_v), (v, u, &*star_v, &*star_u)]
             {
                 let q =
                     self.collapse_quality(keep, remove, at, star_keep, star_remove, min_quality);
@@ -100,8 +123,8 @@ impl<K: Dim> Complex<K> {
         candidates.sort_by(|a, b| b.0.total_cmp(&a.0));
         let mut outcome = Err(Rejection::NoCandidate);
         for (_, cand) in candidates {
-            let star_remove = if cand.keep == u { &star_v } else { &star_u };
-            match self.apply_collapse(cand, star_remove) {
+            let star_remove = if cand.keep == u { &*star_v } else { &*star_u };
+            match self.apply_collapse(cand, star_remove, star) {
                 Ok(()) => return Ok(cand.keep),
                 Err(e) => outcome = Err(e),
             }
@@ -146,12 +169,14 @@ impl<K: Dim> Complex<K> {
         worst
     }
 
+    /// Replaces the cells around `cand.remove` by the kept vertex's; `star` is scratch.
     fn apply_collapse(
         &mut self,
         cand: Candidate<K::Point>,
         star_remove: &[CellId],
+        star: &mut Vec<CellId>,
     ) -> Result<(), Rejection> {
-        let new: Vec<(K::Cell, Label)> = star_remove
+        let new: SmallVec<[(K::Cell, Label); 16]> = star_remove
             .iter()
             .filter(|&&c| !self.cell(c).contains(&cand.keep))
             .map(|&c| {
@@ -166,20 +191,13 @@ impl<K: Dim> Complex<K> {
             .collect();
         let old_pos = self.position(cand.keep);
         self.set_position(cand.keep, cand.at);
-        let mut created = Vec::new();
-        let result = self.replace_cells_merging(
-            star_remove,
-            &new,
-            Some((cand.remove, cand.keep)),
-            &mut created,
-        );
+        let result = self.replace_cells_merging(star_remove, &new, Some((cand.remove, cand.keep)));
         if result.is_err() {
             self.set_position(cand.keep, old_pos);
         } else {
             // The kept vertex moved: its whole star may change class (boundary mask).
-            let mut star = Vec::new();
-            self.star_into(cand.keep, &mut star);
-            self.reclassify_cells(&star);
+            self.star_into(cand.keep, star);
+            self.reclassify_cells(star);
         }
         result
     }
@@ -232,11 +250,16 @@ impl<K: Dim> Complex<K> {
 
     /// Whether the interface facets around `w` are nearly parallel (normals
     /// oriented from the lower to the higher label agree to `straight_cos`).
-    pub(crate) fn interface_is_flat(&self, w: VertexId, straight_cos: f64) -> bool {
-        let mut star = Vec::new();
-        self.star_into(w, &mut star);
-        let mut normals: Vec<K::Point> = Vec::new();
-        for &c in &star {
+    /// `star` is scratch.
+    pub(crate) fn interface_is_flat(
+        &self,
+        w: VertexId,
+        straight_cos: f64,
+        star: &mut Vec<CellId>,
+    ) -> bool {
+        self.star_into(w, star);
+        let mut normals: SmallVec<[K::Point; 16]> = SmallVec::new();
+        for &c in star.iter() {
             let cell = self.cell(c);
             let pts = self.cell_points(c);
             for (i, &corner) in cell.iter().enumerate() {

@@ -47,8 +47,7 @@ impl Complex<D2> {
         }
         let label: Label = self.label(c);
         let new = [([a, b, far], label), ([a, far, d], label)];
-        let mut created = Vec::new();
-        match self.replace_cells(&[c, nb], &new, &mut created) {
+        match self.replace_cells(&[c, nb], &new) {
             Ok(()) => Ok(true),
             Err(Rejection::WouldInvert) => Ok(false),
             Err(e) => Err(e),

@@ -80,8 +80,7 @@ impl Complex<D3> {
         if new_q <= old_q + margin {
             return Err(Rejection::LowQuality);
         }
-        let mut created = Vec::new();
-        self.replace_cells(&[c, nb], &new, &mut created)?;
+        self.replace_cells(&[c, nb], &new)?;
         Ok(Flip3::TwoThree)
     }
 
@@ -204,8 +203,7 @@ impl Complex<D3> {
             stack.push((a, b));
             stack.push((b, c));
         }
-        let mut created = Vec::new();
-        self.replace_cells(&tets, &new, &mut created)?;
+        self.replace_cells(&tets, &new)?;
         Ok(Flip3::EdgeRemoval(k))
     }
 

@@ -10,6 +10,7 @@
 
 use crate::complex::{CellId, Complex, Label, Rejection, VertexId};
 use crate::dim::Dim;
+use smallvec::SmallVec;
 
 impl<K: Dim> Complex<K> {
     /// Splits edge `uv` at its midpoint, returning the new vertex. Per-phase
@@ -18,16 +19,29 @@ impl<K: Dim> Complex<K> {
         if u == v || !self.is_vertex_alive(u) || !self.is_vertex_alive(v) {
             return Err(Rejection::Stale);
         }
-        let mut star = Vec::new();
-        let mut old = Vec::new();
+        let mut star = self.take_list();
+        let mut old = self.take_list();
         self.cells_of_edge(u, v, &mut star, &mut old);
+        let result = self.split_cells_of_edge(u, v, &old);
+        self.give_back(star);
+        self.give_back(old);
+        result
+    }
+
+    /// Splits the cells `old` of the edge `uv` (see [`split_edge`](Self::split_edge)).
+    fn split_cells_of_edge(
+        &mut self,
+        u: VertexId,
+        v: VertexId,
+        old: &[CellId],
+    ) -> Result<VertexId, Rejection> {
         if old.is_empty() {
             return Err(Rejection::Stale);
         }
         let mid = (self.position(u) + self.position(v)) * 0.5;
         let m = self.add_vertex(mid);
-        let mut new: Vec<(K::Cell, Label)> = Vec::with_capacity(2 * old.len());
-        for &c in &old {
+        let mut new: SmallVec<[(K::Cell, Label); 32]> = SmallVec::new();
+        for &c in old {
             for replaced in [u, v] {
                 let mut cell = K::cell(self.cell(c));
                 for w in cell.as_mut() {
@@ -38,8 +52,7 @@ impl<K: Dim> Complex<K> {
                 new.push((cell, self.label(c)));
             }
         }
-        let mut created: Vec<CellId> = Vec::new();
-        self.replace_cells(&old, &new, &mut created)?;
+        self.replace_cells(old, &new)?;
         Ok(m)
     }
 
@@ -72,8 +85,13 @@ impl<K: Dim> Complex<K> {
 
     /// Edges of a cell sorted by increasing length.
     pub fn edges_by_length(&self, c: CellId) -> Vec<(VertexId, VertexId)> {
+        self.sorted_edges(c).to_vec()
+    }
+
+    /// [`edges_by_length`](Self::edges_by_length), on the stack.
+    pub(crate) fn sorted_edges(&self, c: CellId) -> SmallVec<[(VertexId, VertexId); 6]> {
         let cell = self.cell(c);
-        let mut edges: Vec<(f64, VertexId, VertexId)> = Vec::with_capacity(6);
+        let mut edges: SmallVec<[(f64, VertexId, VertexId); 6]> = SmallVec::new();
         for i in 0..K::NV {
             for j in i + 1..K::NV {
                 let d = self.position(cell[i]) - self.position(cell[j]);

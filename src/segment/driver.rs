@@ -9,7 +9,7 @@ use super::model::{Flow, InitContext, LabelContext, LabelView, Models};
 use super::params::SegmentParams;
 use super::raster::Raster;
 use crate::complex::Complex;
-use crate::dsc::DscParams;
+use crate::dsc::{DscParams, DscWorkspace};
 use serde::Serialize;
 use spin_join::SpinHelper;
 use std::time::Instant;
@@ -181,6 +181,9 @@ pub struct Segmentation<'a, K: Raster> {
     models: Models<K>,
     /// The force stage's fields, buffers and destinations.
     force: ForceStage<K>,
+    /// The deform's memo and buffers, kept so that an iteration's deform
+    /// does not allocate.
+    deform_workspace: DscWorkspace<K>,
     /// Whether the label rules can predict their changes
     /// ([`LabelRule::would_relabel`](super::model::LabelRule::would_relabel)) so that
     /// they are checked beside the forces.
@@ -314,6 +317,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             phases,
             models,
             force,
+            deform_workspace: DscWorkspace::new(),
             predict_flips: true,
             nu: 0.0,
             range,
@@ -477,7 +481,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
 
         let t = Instant::now();
         if !self.force.dest.is_empty() {
-            self.complex.deform(&self.force.dest, &self.dsc);
+            self.complex
+                .deform_with(&self.force.dest, &self.dsc, &mut self.deform_workspace);
             // Reused: cleared before it is filled (and grown by `set`).
         }
         self.times.deform += t.elapsed().as_secs_f64();

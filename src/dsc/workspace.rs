@@ -1,0 +1,165 @@
+//! The memo and buffers of `deform` and mesh improvement, kept across calls.
+//!
+//! The segmentation deforms once per iteration, and each deform improves the
+//! mesh a dozen times. Keeping one workspace for the whole run means that,
+//! once its buffers have grown to the size of the interface band, an
+//! iteration's deform allocates nothing of its own (the local mesh
+//! operations' few small buffers aside).
+
+use crate::complex::{CellId, VertexId};
+use crate::dim::Dim;
+use crate::ops::{ImproveMemo, SmoothScratch};
+
+/// What [`Complex::deform_with`](crate::complex::Complex::deform_with) and
+/// [`Complex::improve_near_with`](crate::complex::Complex::improve_near_with)
+/// keep between calls: the improvement memo ([`ImproveMemo`], which forgets
+/// by itself what a compaction or a relabelling invalidates) and scratch
+/// buffers, whose contents never outlive a call. A workspace serves one
+/// complex (the memo's verdicts are about its cells and vertices).
+#[derive(Debug)]
+pub struct DscWorkspace<K: Dim> {
+    pub(super) memo: ImproveMemo,
+    /// Vertices still on their way, those that moved in this round, and
+    /// every vertex moved or created in the call.
+    pub(super) pending: Vec<VertexId>,
+    pub(super) movers: Vec<VertexId>,
+    pub(super) touched: Vec<VertexId>,
+    pub(super) star: Vec<CellId>,
+    /// Interface edges, for resizing.
+    pub(super) edges: Vec<(VertexId, VertexId)>,
+    /// The improved region's cells, and its vertices (smoothed).
+    pub(super) region: RegionBuffers,
+    pub(super) vertices: Vec<VertexId>,
+    /// The region grown by a ring, for the removal of degenerate cells.
+    pub(super) grown: Vec<CellId>,
+    pub(super) grown_marks: Vec<bool>,
+    pub(super) walk: WalkScratch,
+    pub(super) smooth: SmoothScratch<K>,
+}
+
+impl<K: Dim> DscWorkspace<K> {
+    /// An empty workspace.
+    pub fn new() -> Self {
+        DscWorkspace {
+            memo: ImproveMemo::new(),
+            pending: Vec::new(),
+            movers: Vec::new(),
+            touched: Vec::new(),
+            star: Vec::new(),
+            edges: Vec::new(),
+            region: RegionBuffers::default(),
+            vertices: Vec::new(),
+            grown: Vec::new(),
+            grown_marks: Vec::new(),
+            walk: WalkScratch::default(),
+            smooth: SmoothScratch::default(),
+        }
+    }
+}
+
+impl<K: Dim> Default for DscWorkspace<K> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Buffers of the walks over a region's vertices and their stars.
+#[derive(Debug, Default)]
+pub(crate) struct WalkScratch {
+    pub(super) vertices: Vec<VertexId>,
+    pub(super) vertex_marks: Vec<bool>,
+    pub(super) star: Vec<CellId>,
+    /// The worklist of degenerate-cell removal.
+    pub(super) work: Vec<CellId>,
+}
+
+/// The buffers of a [`Region`](super::Region): its cells, their marks by
+/// cell id, and a star.
+#[derive(Debug, Default)]
+pub struct RegionBuffers {
+    pub(super) cells: Vec<CellId>,
+    pub(super) marks: Vec<bool>,
+    pub(super) star: Vec<CellId>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::complex::Complex;
+    use crate::dim::{Point, D2, D3};
+    use crate::dsc::{Connectivity, Destinations, DscParams};
+    use nalgebra::{Vector2, Vector3};
+
+    /// Interface vertices move `step` away from the nearer of two centres:
+    /// two regions grow into each other and merge (unsafe collapses, a
+    /// topology change) over the rounds.
+    fn growing<K: Connectivity>(
+        mesh: &Complex<K>,
+        centres: [K::Point; 2],
+        step: f64,
+    ) -> Destinations<K> {
+        let mut dest = Destinations::new(mesh);
+        for v in mesh.vertex_ids() {
+            if !mesh.class(v).on_interface() {
+                continue;
+            }
+            let p = mesh.position(v);
+            let c = if (p - centres[0]).length() < (p - centres[1]).length() {
+                centres[0]
+            } else {
+                centres[1]
+            };
+            let out = p - c;
+            dest.set(v, mesh.constrain(v, p + out * (step / out.length())));
+        }
+        dest
+    }
+
+    /// One workspace kept across deforms gives, bit for bit, the meshes
+    /// that a fresh workspace per deform gives.
+    fn kept_workspace_deforms_like_fresh_ones<K: Connectivity>(
+        mut mesh: Complex<K>,
+        centres: [K::Point; 2],
+        l: f64,
+        rounds: usize,
+    ) {
+        let params = DscParams::new::<K>(l);
+        let mut kept = mesh.clone();
+        let mut ws = DscWorkspace::new();
+        let components = mesh.components(1);
+        for round in 0..rounds {
+            let dest = growing(&mesh, centres, 0.6 * l);
+            let a = mesh.deform(&dest, &params);
+            let b = kept.deform_with(&dest, &params, &mut ws);
+            let (ma, mb) = (mesh.to_arrays(), kept.to_arrays());
+            // (whole meshes: compared without printing them)
+            assert!(ma.connectivity == mb.connectivity, "round {round}: cells");
+            assert!(ma.labels == mb.labels, "round {round}: labels");
+            assert!(ma.points == mb.points, "round {round}: positions");
+            assert_eq!(a.improve, b.improve, "round {round}");
+        }
+        assert_eq!(components, 2);
+        assert_eq!(mesh.components(1), 1, "the regions merged");
+    }
+
+    #[test]
+    fn kept_workspace_deforms_like_fresh_ones_2d() {
+        let l = 4.0;
+        let centres = [Vector2::new(22.0, 30.0), Vector2::new(50.0, 30.0)];
+        let mut mesh = Complex::<D2>::rectangle(72.0, 60.0, l).unwrap();
+        mesh.label_by(|p| u32::from(centres.iter().any(|&c| (p - c).norm() < 9.0)));
+        kept_workspace_deforms_like_fresh_ones(mesh, centres, l, 12);
+    }
+
+    #[test]
+    fn kept_workspace_deforms_like_fresh_ones_3d() {
+        let l = 4.0;
+        let centres = [
+            Vector3::new(9.0, 12.0, 12.0),
+            Vector3::new(23.0, 12.0, 12.0),
+        ];
+        let mut mesh = Complex::<D3>::cuboid([32.0, 24.0, 24.0], l).unwrap();
+        mesh.label_by(|p| u32::from(centres.iter().any(|&c| (p - c).norm() < 5.0)));
+        kept_workspace_deforms_like_fresh_ones(mesh, centres, l, 6);
+    }
+}
