@@ -13,8 +13,8 @@ use crate::dim::{Dim, Point};
 use serde::Serialize;
 use smallvec::SmallVec;
 
-/// The cavities of 2D flips and collapses, and of most 3D operations, fit
-/// these lists without a heap allocation.
+/// Facets of a cavity kept on the stack: enough for every 2D operation and
+/// the 3D flips; larger 3D cavities (collapses, splits) spill to the heap.
 const INLINE: usize = 32;
 
 /// Why a local operation was not carried out. Rejections are normal control flow.
@@ -171,7 +171,7 @@ impl<K: Dim> Complex<K> {
             }
         }
         facets.sort_unstable_by_key(|e| e.0);
-        let mut links: SmallVec<[K::Neighbours; INLINE]> =
+        let mut links: SmallVec<[K::Neighbours; INLINE / 2]> =
             SmallVec::from_elem(K::no_neighbours(), new.len());
         let base = self.cells.len() as u32;
         // (new j, local i, outside index)
@@ -269,7 +269,7 @@ impl<K: Dim> Complex<K> {
                 }
             }
         }
-        let fresh: SmallVec<[CellId; INLINE]> =
+        let fresh: SmallVec<[CellId; INLINE / 2]> =
             (base..base + new.len() as u32).map(CellId).collect();
         self.reclassify_cells(&fresh);
         Ok(())

@@ -54,8 +54,7 @@ pub struct Complex<K: Dim> {
     /// Counts vertex moves and creations and cell replacements.
     move_clock: u64,
     /// Cleared lists that operations borrow ([`Complex::take_list`]), so
-    /// that a move, flip, collapse or split allocates nothing once they
-    /// have grown.
+    /// that a move, collapse or split allocates nothing once they have grown.
     spare_lists: Vec<Vec<CellId>>,
     /// Counts the calls that changed labels.
     relabels: u64,

@@ -85,6 +85,9 @@ impl<K: Connectivity> Complex<K> {
     ) -> DeformReport {
         let mut report = DeformReport::default();
         let tol = params.tolerance();
+        // The verdicts of the last call are about cells and vertices that
+        // the compaction ending it renumbered (or about another complex).
+        ws.memo.forget();
         let mut pending = std::mem::take(&mut ws.pending);
         let mut movers = std::mem::take(&mut ws.movers);
         let mut touched = std::mem::take(&mut ws.touched);

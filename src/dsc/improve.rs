@@ -49,7 +49,7 @@ impl<'s> Region<'s> {
 
     /// The cells around `seeds`, collected into `buffers` (given back by
     /// [`into_buffers`](Self::into_buffers)).
-    pub fn around_in(seeds: &'s [VertexId], buffers: RegionBuffers) -> Self {
+    pub(crate) fn around_in(seeds: &'s [VertexId], buffers: RegionBuffers) -> Self {
         Region {
             seeds: Some(seeds),
             buffers,
@@ -90,7 +90,7 @@ impl<'s> Region<'s> {
     }
 
     /// The buffers, for the next region.
-    pub fn into_buffers(self) -> RegionBuffers {
+    pub(crate) fn into_buffers(self) -> RegionBuffers {
         self.buffers
     }
 }
@@ -212,8 +212,8 @@ impl<K: Connectivity> Complex<K> {
     }
 
     /// [`improve_near`](Self::improve_near) with a workspace kept across
-    /// calls: its memo remembers what the improvement verified (see
-    /// [`ImproveMemo`]), and its buffers are reused.
+    /// calls about this complex: its memo remembers what the improvement
+    /// verified (see [`ImproveMemo`]), and its buffers are reused.
     pub fn improve_near_with(
         &mut self,
         seeds: &[VertexId],

@@ -13,4 +13,4 @@ mod workspace;
 pub use deform::{DeformReport, Destinations};
 pub use improve::{Connectivity, Region};
 pub use params::{DscParams, ParamError};
-pub use workspace::{DscWorkspace, RegionBuffers};
+pub use workspace::DscWorkspace;

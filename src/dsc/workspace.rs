@@ -12,10 +12,11 @@ use crate::ops::{ImproveMemo, SmoothScratch};
 
 /// What [`Complex::deform_with`](crate::complex::Complex::deform_with) and
 /// [`Complex::improve_near_with`](crate::complex::Complex::improve_near_with)
-/// keep between calls: the improvement memo ([`ImproveMemo`], which forgets
-/// by itself what a compaction or a relabelling invalidates) and scratch
-/// buffers, whose contents never outlive a call. A workspace serves one
-/// complex (the memo's verdicts are about its cells and vertices).
+/// keep between calls: the improvement memo ([`ImproveMemo`]) and scratch
+/// buffers, whose contents never outlive a call. `deform_with` starts by
+/// forgetting the memo, so any complex may use the workspace there; calls
+/// of `improve_near_with` in a row must be about one complex (the memo's
+/// verdicts are about its cells and vertices).
 #[derive(Debug)]
 pub struct DscWorkspace<K: Dim> {
     pub(super) memo: ImproveMemo,
@@ -76,7 +77,7 @@ pub(crate) struct WalkScratch {
 /// The buffers of a [`Region`](super::Region): its cells, their marks by
 /// cell id, and a star.
 #[derive(Debug, Default)]
-pub struct RegionBuffers {
+pub(crate) struct RegionBuffers {
     pub(super) cells: Vec<CellId>,
     pub(super) marks: Vec<bool>,
     pub(super) star: Vec<CellId>,
@@ -116,7 +117,8 @@ mod tests {
     }
 
     /// One workspace kept across deforms gives, bit for bit, the meshes
-    /// that a fresh workspace per deform gives.
+    /// that a fresh workspace per deform gives, even when another complex
+    /// uses it in between.
     fn kept_workspace_deforms_like_fresh_ones<K: Connectivity>(
         mut mesh: Complex<K>,
         centres: [K::Point; 2],
@@ -125,11 +127,13 @@ mod tests {
     ) {
         let params = DscParams::new::<K>(l);
         let mut kept = mesh.clone();
+        let mut other = mesh.clone();
         let mut ws = DscWorkspace::new();
         let components = mesh.components(1);
         for round in 0..rounds {
             let dest = growing(&mesh, centres, 0.6 * l);
             let a = mesh.deform(&dest, &params);
+            other.deform_with(&dest, &params, &mut ws);
             let b = kept.deform_with(&dest, &params, &mut ws);
             let (ma, mb) = (mesh.to_arrays(), kept.to_arrays());
             // (whole meshes: compared without printing them)

@@ -12,7 +12,9 @@
 //! alone, so it is checked against [`Complex::star_changed_at`], which the
 //! complex advances for every vertex around a move or a cell replacement:
 //! no walk of the star is needed to skip it. Valid until the complex is
-//! compacted (the ids change), so one memo serves one `deform` call.
+//! compacted (the ids change), so one memo serves one `deform` call (a
+//! kept [`DscWorkspace`](crate::dsc::DscWorkspace) forgets it when the next
+//! call starts, keeping only the arrays' capacity).
 
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::{Dim, D2};
@@ -53,15 +55,20 @@ impl ImproveMemo {
     /// improvement calls it, so a memo may be kept across calls.
     pub fn sync<K: Dim>(&mut self, complex: &Complex<K>) {
         if complex.compactions() != self.compactions {
-            self.kept.clear();
-            self.sound.clear();
-            self.settled.clear();
+            self.forget();
             self.compactions = complex.compactions();
         }
         if complex.relabels() != self.relabels {
             self.settled.clear();
             self.relabels = complex.relabels();
         }
+    }
+
+    /// Forgets every verdict (keeps the arrays' capacity).
+    pub fn forget(&mut self) {
+        self.kept.clear();
+        self.sound.clear();
+        self.settled.clear();
     }
 
     /// Forgets the degenerate-cell verdicts if they were given under other

@@ -40,7 +40,8 @@ impl<K: Dim> Complex<K> {
         }
         let mid = (self.position(u) + self.position(v)) * 0.5;
         let m = self.add_vertex(mid);
-        let mut new: SmallVec<[(K::Cell, Label); 32]> = SmallVec::new();
+        // (4 cells in 2D; about 14 in 3D)
+        let mut new: SmallVec<[(K::Cell, Label); 16]> = SmallVec::new();
         for &c in old {
             for replaced in [u, v] {
                 let mut cell = K::cell(self.cell(c));
