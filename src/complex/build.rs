@@ -137,12 +137,14 @@ impl<K: Dim> Complex<K> {
 
     /// Recomputes every vertex class.
     pub fn reclassify_all(&mut self) {
+        let mut star = self.take_list();
         for v in 0..self.positions.len() {
             let v = VertexId(v as u32);
             if self.is_vertex_alive(v) {
-                self.classes[v.index()] = self.compute_class(v);
+                self.classes[v.index()] = self.compute_class_with(v, &mut star);
             }
         }
+        self.give_back(star);
     }
 
     /// Relabels every cell with `f(cell centroid)` (used by initialisations).

@@ -3,6 +3,7 @@
 use super::{CellId, Complex, Label, VertexId};
 use crate::dim::Dim;
 use serde::{Deserialize, Serialize};
+use smallvec::SmallVec;
 
 /// How a vertex sits relative to the phase interface.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -63,7 +64,12 @@ impl<K: Dim> Complex<K> {
 
     /// Recomputes the class of `v` from the labels around it.
     pub(crate) fn compute_class(&self, v: VertexId) -> VertexClass {
-        let pieces = self.count_phase_pieces(v);
+        self.compute_class_with(v, &mut Vec::new())
+    }
+
+    /// [`compute_class`](Self::compute_class); `star` is scratch.
+    pub(super) fn compute_class_with(&self, v: VertexId, star: &mut Vec<CellId>) -> VertexClass {
+        let pieces = self.phase_pieces_with(v, star);
         let kind = match pieces {
             0 | 1 => VertexKind::Interior,
             2 => VertexKind::Interface,
@@ -77,12 +83,17 @@ impl<K: Dim> Complex<K> {
 
     /// Number of connected same-label pieces of the star of `v` (connected through facets containing `v`).
     pub fn count_phase_pieces(&self, v: VertexId) -> usize {
+        self.phase_pieces_with(v, &mut Vec::new())
+    }
+
+    /// [`count_phase_pieces`](Self::count_phase_pieces); `star` is scratch.
+    fn phase_pieces_with(&self, v: VertexId, star: &mut Vec<CellId>) -> usize {
         if K::N == 2 {
             if let Some(pieces) = self.fan_phase_pieces(v) {
                 return pieces;
             }
         }
-        self.phase_pieces_by_search(v)
+        self.phase_pieces_by_search(v, star)
     }
 
     /// The 2D star is a fan, so its same-label pieces are the runs between
@@ -130,13 +141,14 @@ impl<K: Dim> Complex<K> {
         out
     }
 
-    /// [`count_phase_pieces`](Self::count_phase_pieces) by a search over the star.
-    pub(super) fn phase_pieces_by_search(&self, v: VertexId) -> usize {
-        let mut star = Vec::new();
-        self.star_into(v, &mut star);
-        let mut piece = vec![usize::MAX; star.len()];
+    /// [`count_phase_pieces`](Self::count_phase_pieces) by a search over the
+    /// star (`star` is scratch; the rest is on the stack for stars of up to
+    /// 64 cells).
+    pub(super) fn phase_pieces_by_search(&self, v: VertexId, star: &mut Vec<CellId>) -> usize {
+        self.star_into(v, star);
+        let mut piece: SmallVec<[usize; 64]> = SmallVec::from_elem(usize::MAX, star.len());
         let mut pieces = 0;
-        let mut stack = Vec::new();
+        let mut stack: SmallVec<[usize; 64]> = SmallVec::new();
         for start in 0..star.len() {
             if piece[start] != usize::MAX {
                 continue;
@@ -203,12 +215,14 @@ impl<K: Dim> Complex<K> {
     /// Recomputes the class of each listed vertex once (sorts the list).
     fn reclassify_vertices(&mut self, vertices: &mut [VertexId]) {
         vertices.sort_unstable();
+        let mut star = self.take_list();
         let mut last = None;
         for &v in vertices.iter() {
             if last != Some(v) {
-                self.classes[v.index()] = self.compute_class(v);
+                self.classes[v.index()] = self.compute_class_with(v, &mut star);
                 last = Some(v);
             }
         }
+        self.give_back(star);
     }
 }

@@ -8,22 +8,27 @@
 //! elsewhere), which [`Complex::has_junction_edge`] detects: the segmentation
 //! gives those vertices no region force, like any crossing where a phase repeats.
 
-use super::{Complex, VertexId};
+use super::{CellId, Complex, VertexId};
 use crate::dim::{Dim, D3};
+use smallvec::SmallVec;
 
 impl<K: Dim> Complex<K> {
     /// Whether some edge at `v` lies in more than two interface facets (only
     /// possible in 3D: a junction curve or a non-manifold contact).
     pub fn has_junction_edge(&self, v: VertexId) -> bool {
+        self.has_junction_edge_with(v, &mut Vec::new())
+    }
+
+    /// [`has_junction_edge`](Self::has_junction_edge); `star` is scratch.
+    pub fn has_junction_edge_with(&self, v: VertexId, star: &mut Vec<CellId>) -> bool {
         if K::N < 3 {
             return false;
         }
-        let mut star = Vec::new();
-        self.star_into(v, &mut star);
+        self.star_into(v, star);
         // Interface facets at v, each seen from both sides: count per other vertex w
         // the facets containing the edge vw (every facet counted twice).
-        let mut counts: Vec<(VertexId, usize)> = Vec::new();
-        for &c in &star {
+        let mut counts: SmallVec<[(VertexId, usize); 32]> = SmallVec::new();
+        for &c in star.iter() {
             let cell = self.cell(c);
             for (i, &opposite) in cell.iter().enumerate() {
                 if opposite == v || !self.is_interface_facet(c, i) {

@@ -520,7 +520,7 @@ mod tests {
                 assert_eq!(fan, bfs, "step {step}, vertex {v:?}");
                 assert_eq!(
                     c.fan_phase_pieces(v),
-                    Some(c.phase_pieces_by_search(v)),
+                    Some(c.phase_pieces_by_search(v, &mut Vec::new())),
                     "step {step}, vertex {v:?}"
                 );
             }

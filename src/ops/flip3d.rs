@@ -19,6 +19,11 @@
 use crate::complex::{CellId, Complex, Label, Rejection, VertexId};
 use crate::dim::{Dim, D3};
 use nalgebra::Vector3;
+use smallvec::SmallVec;
+
+/// A ring of vertices around an edge, on the stack for every ring edge
+/// removal accepts (and most it sees).
+type Ring = SmallVec<[VertexId; 16]>;
 
 /// Largest ring of tets around an edge that edge removal will retriangulate.
 pub const MAX_RING: usize = 7;
@@ -64,7 +69,7 @@ impl Complex<D3> {
             .ok_or(Rejection::Stale)?;
         // Replacing each facet vertex of `c` by `q` gives the three tets around
         // the edge (apex of c, q); all positive iff the pair is convex there.
-        let mut new = Vec::with_capacity(3);
+        let mut new: SmallVec<[([VertexId; 4], Label); 3]> = SmallVec::new();
         for j in 0..4 {
             if j != i {
                 let mut t = cell;
@@ -88,19 +93,30 @@ impl Complex<D3> {
     /// `(u, v, w_k, w_{k+1})` is positive, and the tets of the ring. `None` when
     /// the ring is open (the edge lies on the domain boundary) or not a simple cycle.
     pub fn edge_ring(&self, u: VertexId, v: VertexId) -> Option<(Vec<VertexId>, Vec<CellId>)> {
-        let mut star = Vec::new();
         let mut tets = Vec::new();
-        self.cells_of_edge(u, v, &mut star, &mut tets);
+        let ring = self.ring_of_edge(u, v, &mut Vec::new(), &mut tets)?;
+        Some((ring.to_vec(), tets))
+    }
+
+    /// [`edge_ring`](Self::edge_ring) into scratch lists: `tets` receives the
+    /// tets of the ring (`star` is scratch); the ring is returned.
+    fn ring_of_edge(
+        &self,
+        u: VertexId,
+        v: VertexId,
+        star: &mut Vec<CellId>,
+        tets: &mut Vec<CellId>,
+    ) -> Option<Ring> {
+        self.cells_of_edge(u, v, star, tets);
         if tets.len() < 3 {
             return None;
         }
         // Directed ring edges x -> y with (u, v, x, y) positive.
-        let mut next: Vec<(VertexId, VertexId)> = Vec::with_capacity(tets.len());
-        for &t in &tets {
+        let mut next: SmallVec<[(VertexId, VertexId); 16]> = SmallVec::new();
+        for &t in tets.iter() {
             let cell = self.cell(t);
-            let others: Vec<VertexId> =
-                cell.iter().copied().filter(|&w| w != u && w != v).collect();
-            let (x, y) = (others[0], others[1]);
+            let mut others = cell.iter().copied().filter(|&w| w != u && w != v);
+            let (x, y) = (others.next()?, others.next()?);
             // Parity of the permutation taking `cell` to (u, v, x, y).
             let target = [u, v, x, y];
             let mut perm = [0usize; 4];
@@ -117,15 +133,15 @@ impl Complex<D3> {
             }
             next.push(if inversions % 2 == 0 { (x, y) } else { (y, x) });
         }
-        let mut ring = Vec::with_capacity(tets.len());
+        let mut ring = Ring::new();
         let mut cur = next[0].0;
         for _ in 0..tets.len() {
             ring.push(cur);
-            let step = next.iter().filter(|e| e.0 == cur).collect::<Vec<_>>();
-            if step.len() != 1 {
-                return None;
+            let mut steps = next.iter().filter(|e| e.0 == cur);
+            match (steps.next(), steps.next()) {
+                (Some(step), None) => cur = step.1,
+                _ => return None,
             }
-            cur = step[0].1;
         }
         if cur != ring[0] {
             return None;
@@ -133,7 +149,7 @@ impl Complex<D3> {
         let mut sorted = ring.clone();
         sorted.sort_unstable();
         sorted.dedup();
-        (sorted.len() == ring.len()).then_some((ring, tets))
+        (sorted.len() == ring.len()).then_some(ring)
     }
 
     /// Removes the edge `uv` (off the interface, inside the domain, with at most
@@ -153,7 +169,25 @@ impl Complex<D3> {
         if u == v || !self.is_vertex_alive(u) || !self.is_vertex_alive(v) {
             return Err(Rejection::Stale);
         }
-        let (ring, tets) = self.edge_ring(u, v).ok_or(Rejection::Constrained)?;
+        let (mut star, mut tets) = (self.take_list(), self.take_list());
+        let result = self.remove_edge_with(u, v, margin, &mut star, &mut tets);
+        self.give_back(star);
+        self.give_back(tets);
+        result
+    }
+
+    /// [`remove_edge`](Self::remove_edge) with two empty lists.
+    fn remove_edge_with(
+        &mut self,
+        u: VertexId,
+        v: VertexId,
+        margin: f64,
+        star: &mut Vec<CellId>,
+        tets: &mut Vec<CellId>,
+    ) -> Result<Flip3, Rejection> {
+        let ring = self
+            .ring_of_edge(u, v, star, tets)
+            .ok_or(Rejection::Constrained)?;
         let k = ring.len();
         if k > MAX_RING {
             return Err(Rejection::Constrained);
@@ -164,7 +198,8 @@ impl Complex<D3> {
         }
         let old_q = tets.iter().map(|&t| self.quality(t)).fold(1.0, f64::min);
         let (pu, pv) = (self.position(u), self.position(v));
-        let w: Vec<Vector3<f64>> = ring.iter().map(|&x| self.position(x)).collect();
+        let w: SmallVec<[Vector3<f64>; MAX_RING]> =
+            ring.iter().map(|&x| self.position(x)).collect();
         // Quality of the two tets a triangle (a, b, c) of the ring forms with u and v.
         let tri_q = |a: usize, b: usize, c: usize| {
             tet_quality([w[a], w[b], w[c], pv]).min(tet_quality([w[b], w[a], w[c], pu]))
@@ -191,8 +226,9 @@ impl Complex<D3> {
         if best[0][k - 1] <= old_q + margin {
             return Err(Rejection::LowQuality);
         }
-        let mut new = Vec::with_capacity(2 * (k - 2));
-        let mut stack = vec![(0, k - 1)];
+        let mut new: SmallVec<[([VertexId; 4], Label); 2 * MAX_RING]> = SmallVec::new();
+        let mut stack: SmallVec<[(usize, usize); MAX_RING]> = SmallVec::new();
+        stack.push((0, k - 1));
         while let Some((a, c)) = stack.pop() {
             if c < a + 2 {
                 continue;
@@ -203,7 +239,7 @@ impl Complex<D3> {
             stack.push((a, b));
             stack.push((b, c));
         }
-        self.replace_cells(&tets, &new)?;
+        self.replace_cells(tets, &new)?;
         Ok(Flip3::EdgeRemoval(k))
     }
 

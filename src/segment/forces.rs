@@ -172,7 +172,9 @@ impl<K: Raster> ForceField<K> {
             VertexKind::Interior => return ForceKind::Off,
             // 3D: a two-piece star can still sit on an edge with more than two
             // interface triangles (two sheets of a phase touching): a crossing.
-            VertexKind::Interface if complex.has_junction_edge(v) => return ForceKind::Crossing,
+            VertexKind::Interface if complex.has_junction_edge_with(v, &mut self.star) => {
+                return ForceKind::Crossing
+            }
             VertexKind::Interface => return ForceKind::Interface,
             VertexKind::Junction => {}
         }
