@@ -191,31 +191,26 @@ impl<K: Dim> Complex<K> {
     /// Recomputes the class of every live vertex of the given cells.
     /// Each vertex once, however many of the cells hold it (a class depends
     /// only on the labels and positions, not on the order of the updates).
-    /// Small batches (every flip and collapse) are listed on the stack.
+    /// The corners of every flip and collapse (a 3D collapse's star: about
+    /// 30 tets) are listed on the stack.
     pub(crate) fn reclassify_cells(&mut self, cells: &[CellId]) {
-        let corners = cells
+        let mut corners: SmallVec<[VertexId; 128]> = cells
             .iter()
             .filter(|&&c| self.is_alive(c))
-            .flat_map(|&c| self.cells[c.index()].as_ref().iter().copied());
-        const ON_STACK: usize = 64;
-        if cells.len() * K::NV <= ON_STACK {
-            let mut list = [VertexId(0); ON_STACK];
-            let mut n = 0;
-            for v in corners {
-                list[n] = v;
-                n += 1;
-            }
-            self.reclassify_vertices(&mut list[..n]);
-        } else {
-            let mut list: Vec<VertexId> = corners.collect();
-            self.reclassify_vertices(&mut list);
-        }
+            .flat_map(|&c| self.cells[c.index()].as_ref().iter().copied())
+            .collect();
+        self.reclassify_vertices(&mut corners);
     }
 
     /// Recomputes the class of each listed vertex once (sorts the list).
     fn reclassify_vertices(&mut self, vertices: &mut [VertexId]) {
         vertices.sort_unstable();
-        let mut star = self.take_list();
+        // (the 2D pieces are counted by a walk around the fan, without a star)
+        let mut star = if K::N == 3 {
+            self.take_list()
+        } else {
+            Vec::new()
+        };
         let mut last = None;
         for &v in vertices.iter() {
             if last != Some(v) {
@@ -223,6 +218,8 @@ impl<K: Dim> Complex<K> {
                 last = Some(v);
             }
         }
-        self.give_back(star);
+        if K::N == 3 {
+            self.give_back(star);
+        }
     }
 }
