@@ -20,7 +20,7 @@ impl<K: Dim> Complex<K> {
     }
 
     /// [`has_junction_edge`](Self::has_junction_edge); `star` is scratch.
-    pub fn has_junction_edge_with(&self, v: VertexId, star: &mut Vec<CellId>) -> bool {
+    pub(crate) fn has_junction_edge_with(&self, v: VertexId, star: &mut Vec<CellId>) -> bool {
         if K::N < 3 {
             return false;
         }

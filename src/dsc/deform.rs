@@ -91,7 +91,7 @@ impl<K: Connectivity> Complex<K> {
         let mut pending = std::mem::take(&mut ws.pending);
         let mut movers = std::mem::take(&mut ws.movers);
         let mut touched = std::mem::take(&mut ws.touched);
-        let mut star = std::mem::take(&mut ws.star);
+        let mut star = self.take_list();
         pending.clear();
         pending.extend(
             (0..destinations.targets.len() as u32)
@@ -133,8 +133,9 @@ impl<K: Connectivity> Complex<K> {
             &mut report.improve,
             self.improve_near_with(&touched, params, ws),
         );
+        self.give_back(star);
         self.compact_in_place();
-        (ws.pending, ws.movers, ws.touched, ws.star) = (pending, movers, touched, star);
+        (ws.pending, ws.movers, ws.touched) = (pending, movers, touched);
         report
     }
 }

@@ -255,12 +255,13 @@ impl<K: Connectivity> Complex<K> {
         params: &DscParams,
         ws: &mut DscWorkspace<K>,
     ) -> (usize, usize, usize) {
-        let cells = &mut ws.grown;
-        cells.clear();
-        cells.extend_from_slice(region.cells(self));
-        if !self.degenerate_near(cells, params, &mut ws.memo, &mut ws.walk) {
+        let region_cells = region.cells(self);
+        if !self.degenerate_near(region_cells, params, &mut ws.memo, &mut ws.walk) {
             return (0, 0, 0);
         }
+        let cells = &mut ws.grown;
+        cells.clear();
+        cells.extend_from_slice(region_cells);
         let marks = &mut ws.grown_marks;
         marks.clear();
         marks.resize(self.cell_capacity(), false);

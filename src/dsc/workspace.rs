@@ -25,7 +25,6 @@ pub struct DscWorkspace<K: Dim> {
     pub(super) pending: Vec<VertexId>,
     pub(super) movers: Vec<VertexId>,
     pub(super) touched: Vec<VertexId>,
-    pub(super) star: Vec<CellId>,
     /// Interface edges, for resizing.
     pub(super) edges: Vec<(VertexId, VertexId)>,
     /// The improved region's cells, and its vertices (smoothed).
@@ -46,7 +45,6 @@ impl<K: Dim> DscWorkspace<K> {
             pending: Vec::new(),
             movers: Vec::new(),
             touched: Vec::new(),
-            star: Vec::new(),
             edges: Vec::new(),
             region: RegionBuffers::default(),
             vertices: Vec::new(),

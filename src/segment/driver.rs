@@ -483,7 +483,6 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         if !self.force.dest.is_empty() {
             self.complex
                 .deform_with(&self.force.dest, &self.dsc, &mut self.deform_workspace);
-            // Reused: cleared before it is filled (and grown by `set`).
         }
         self.times.deform += t.elapsed().as_secs_f64();
 
