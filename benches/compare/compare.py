@@ -1,0 +1,250 @@
+#!/usr/bin/env python3
+"""dsc-seg against its peers, side by side on the same phantoms with the same metric.
+
+Writes the phantoms with `dsc-seg phantom` (2D) and `dsc-seg phantom3d` (3D),
+segments each with `dsc-seg segment --phases K` / `dsc-seg segment3d` (all
+other options at their defaults) and with every peer of `peers.py` that
+handles its phase count and dimension, and scores every result against the
+ground truth with `score.py` (Hungarian matching, Dice per phase). Prints
+Markdown tables and writes OUT/results.json.
+
+Times are the segmentation alone, without reading or writing files, for
+dsc-seg (report.json `times.segment`) and the peers alike; each is the
+minimum over --repeat runs, all methods in the same run (so under the same
+machine load). Peak memory is the resident set of the dsc-seg process,
+measured with GNU time (`/usr/bin/time`, Debian package `time`) when it is
+installed.
+
+usage (from the repository root, after `cargo build --release` and
+`pip install -r benches/compare/requirements.txt`):
+
+  python3 benches/compare/compare.py --out OUT            # the README's tables
+  python3 benches/compare/compare.py --out OUT --only 2d --sizes 256 --sigmas 0.2 --repeat 1
+  python3 benches/compare/compare.py --out OUT --only 3d --sizes3d 64 --methods3d mbo multi_otsu
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+from PIL import Image
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import peers  # noqa: E402
+import score  # noqa: E402
+
+PHANTOMS_2D = {"two_phase": 2, "four_phase": 4}
+PHANTOMS_3D = ["two_balls", "torus", "hollow_sphere"]
+# The 2D cases without --sizes/--sigmas: 256² and 512² at both noise levels,
+# 1024² at the higher one.
+DEFAULT_CASES_2D = [(256, 0.1), (256, 0.2), (512, 0.1), (512, 0.2), (1024, 0.2)]
+PEER_ORDER = ["multi_otsu", "blur_multi_otsu", "mbo", "chan_vese", "morph_chan_vese"]
+
+
+GNU_TIME = "/usr/bin/time"
+
+
+def run_measured(cmd: list[str], scratch: str) -> float | None:
+    """Runs a command and fails loudly if it fails. Returns its peak resident
+    memory in MiB, measured by GNU time (a process forked from Python would
+    count Python's own memory), or None without GNU time."""
+    os.makedirs(scratch, exist_ok=True)
+    rss_file = os.path.join(scratch, "peak_rss_kib")
+    measured = os.access(GNU_TIME, os.X_OK)
+    full = [GNU_TIME, "-f", "%M", "-o", rss_file] + cmd if measured else cmd
+    done = subprocess.run(full, stdout=subprocess.DEVNULL)
+    if done.returncode != 0:
+        sys.exit(f"error: {' '.join(cmd)} exited with {done.returncode}")
+    if not measured:
+        return None
+    with open(rss_file) as f:
+        return int(f.read().split()[-1]) / 1024
+
+
+def read_image(path: str) -> np.ndarray:
+    if path.endswith(".tif"):
+        import tifffile
+
+        return tifffile.imread(path)
+    return np.asarray(Image.open(path).convert("L"))
+
+
+def unit_range(values: np.ndarray) -> np.ndarray:
+    return values.astype(np.float64) / float(np.iinfo(values.dtype).max)
+
+
+def run_ours(binary: str, args: list[str], out: str, truth: np.ndarray, repeat: int) -> dict:
+    best, peak = float("inf"), None
+    for _ in range(repeat):
+        rss = run_measured([binary] + args + ["--out", out, "--quiet"], out + "-rss")
+        peak = rss if peak is None else max(peak, rss)
+        with open(os.path.join(out, "report.json")) as f:
+            report = json.load(f)
+        best = min(best, report["times"]["segment"])
+    labels_file = "labels.tif" if args[0] == "segment3d" else "labels.png"
+    result = score.score(truth, read_image(os.path.join(out, labels_file)))
+    result.update(time_s=best, peak_mib=peak, iterations=report["iterations"],
+                  converged=report["converged"], cells=report["cells"])
+    return result
+
+
+def run_peer(name: str, image: np.ndarray, phases: int, truth: np.ndarray, repeat: int) -> dict:
+    function = peers.PEERS[name][0]
+    best = float("inf")
+    for _ in range(repeat):
+        start = time.perf_counter()
+        labels = function(image, phases)
+        best = min(best, time.perf_counter() - start)
+    result = score.score(truth, labels)
+    result["time_s"] = best
+    return result
+
+
+def case(binary, kind, name, size, noise, phases, seed, out, repeat, methods):
+    """One phantom: writes it, runs dsc-seg and the peers; returns a result row."""
+    tag = f"{name}_{size}_s{noise:.2f}"
+    folder = os.path.join(out, "3d" if kind == "3d" else "2d", tag)
+    phantom_cmd = "phantom3d" if kind == "3d" else "phantom"
+    run_measured([binary, phantom_cmd, name, "--size", str(size), "--noise", str(noise),
+                  "--seed", str(seed), "--out", folder], folder)
+    if kind == "3d":
+        source, truth_file = f"{name}.tif", f"{name}_labels.tif"
+        ours_args = ["segment3d", os.path.join(folder, source), "--phases", str(phases)]
+    else:
+        source, truth_file = f"{name}.png", f"{name}_gt.png"
+        ours_args = ["segment", os.path.join(folder, source), "--phases", str(phases)]
+    image = unit_range(read_image(os.path.join(folder, source)))
+    truth = read_image(os.path.join(folder, truth_file))
+    row = {"image": tag, "phantom": name, "size": size, "noise": noise, "phases": phases,
+           "dsc-seg": run_ours(binary, ours_args, os.path.join(folder, "dsc-seg"), truth, repeat)}
+    for method in methods:
+        if peers.applicable(method, phases, image.ndim):
+            row[method] = run_peer(method, image, phases, truth, repeat)
+    return row
+
+
+def cell(result: dict | None) -> str:
+    if result is None:
+        return "–"
+    return f"{result['mean_dice']:.4f} ({result['time_s']:.3f} s)"
+
+
+def mib(value: float | None) -> str:
+    return "–" if value is None else f"{value:.0f}"
+
+
+def full_table(rows: list[dict], methods: list[str]) -> str:
+    header = ["image", "dsc-seg Dice (s)", "iterations", "peak MiB"] + [f"{m} Dice (s)" for m in methods]
+    lines = ["| " + " | ".join(header) + " |", "|---" * len(header) + "|"]
+    for row in rows:
+        ours = row["dsc-seg"]
+        cells = [row["image"], cell(ours), str(ours["iterations"]), mib(ours["peak_mib"])]
+        lines.append("| " + " | ".join(cells + [cell(row.get(m)) for m in methods]) + " |")
+    return "\n".join(lines)
+
+
+def summary_table(rows: list[dict]) -> str:
+    """The README's table: ours, the best peer by Dice, and the MBO scheme's time."""
+    lines = ["| image | dsc-seg Dice | dsc-seg s | best peer Dice (method, s) | MBO s |",
+             "|---|---|---|---|---|"]
+    for row in rows:
+        ours = row["dsc-seg"]
+        others = {m: r for m, r in row.items() if m in peers.PEERS}
+        if others:
+            best_name = max(others, key=lambda m: others[m]["mean_dice"])
+            best = others[best_name]
+            best_text = f"{best['mean_dice']:.4f} ({best_name}, {best['time_s']:.3f})"
+        else:
+            best_text = "–"
+        mbo = f"{row['mbo']['time_s']:.3f}" if "mbo" in row else "–"
+        lines.append(f"| {row['image']} | {ours['mean_dice']:.4f} | {ours['time_s']:.3f} | {best_text} | {mbo} |")
+    return "\n".join(lines)
+
+
+def memory_table(binary: str, out: str, sizes: list[int]) -> tuple[str, list[dict]]:
+    """Peak memory of dsc-seg on large two-phase phantoms (σ = 0.2)."""
+    lines = ["| two-phase phantom | peak MiB | segment s | iterations |", "|---|---|---|---|"]
+    rows = []
+    for size in sizes:
+        folder = os.path.join(out, "memory", str(size))
+        run_measured([binary, "phantom", "two_phase", "--size", str(size), "--noise", "0.2",
+                      "--out", folder], folder)
+        truth = read_image(os.path.join(folder, "two_phase_gt.png"))
+        ours = run_ours(binary, ["segment", os.path.join(folder, "two_phase.png"), "--phases", "2"],
+                        os.path.join(folder, "dsc-seg"), truth, 1)
+        rows.append({"size": size, **ours})
+        lines.append(f"| {size}² | {mib(ours['peak_mib'])} | {ours['time_s']:.3f} | {ours['iterations']} |")
+    return "\n".join(lines), rows
+
+
+def parse_args() -> argparse.Namespace:
+    default_bin = os.environ.get("DSC_SEG") or os.path.join(
+        os.environ.get("CARGO_TARGET_DIR", "target"), "release", "dsc-seg")
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", required=True, help="folder for the phantoms, the outputs and results.json")
+    ap.add_argument("--bin", default=default_bin, help="the dsc-seg binary (default: target/release/dsc-seg)")
+    ap.add_argument("--only", choices=["2d", "3d"], help="run only the 2D images or only the 3D volumes")
+    ap.add_argument("--repeat", type=int, default=3, help="runs per method and 2D image; time = minimum")
+    ap.add_argument("--repeat3d", type=int, default=1, help="runs per method and volume")
+    ap.add_argument("--sizes", type=int, nargs="+", help="2D sizes (default: 256 512 at both noise "
+                    "levels and 1024 at 0.2)")
+    ap.add_argument("--sigmas", type=float, nargs="+", help="2D noise levels (with --sizes; default 0.1 0.2)")
+    ap.add_argument("--sizes3d", type=int, nargs="+", default=[64, 128])
+    ap.add_argument("--sigmas3d", type=float, nargs="+", default=[0.1, 0.2])
+    ap.add_argument("--seed", type=int, default=1, help="noise seed of every phantom")
+    ap.add_argument("--methods", nargs="+", choices=PEER_ORDER, default=PEER_ORDER, help="2D peers")
+    ap.add_argument("--methods3d", nargs="+", choices=PEER_ORDER, default=PEER_ORDER,
+                    help="3D peers (chan_vese is 2D only; morph_chan_vese is the slowest)")
+    ap.add_argument("--memory", nargs="*", type=int, metavar="SIZE",
+                    help="also measure dsc-seg's peak memory on two-phase phantoms of these sizes "
+                    "(default 1024 4096)")
+    a = ap.parse_args()
+    if not os.access(a.bin, os.X_OK):
+        ap.error(f"no dsc-seg binary at {a.bin} (run `cargo build --release` or give --bin)")
+    if a.memory is not None and not a.memory:
+        a.memory = [1024, 4096]
+    return a
+
+
+def main() -> None:
+    a = parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    results = {"two_d": [], "three_d": [], "memory": []}
+    if a.only != "3d":
+        cases = ([(n, s) for n in a.sizes for s in (a.sigmas or [0.1, 0.2])] if a.sizes else DEFAULT_CASES_2D)
+        for name, phases in PHANTOMS_2D.items():
+            for size, noise in cases:
+                row = case(a.bin, "2d", name, size, noise, phases, a.seed, a.out, a.repeat, a.methods)
+                results["two_d"].append(row)
+                print(f"{row['image']}: dsc-seg {cell(row['dsc-seg'])}", file=sys.stderr, flush=True)
+        methods = [m for m in PEER_ORDER if m in a.methods]
+        print("## 2D\n\n" + summary_table(results["two_d"]) + "\n\n" + full_table(results["two_d"], methods) + "\n")
+    if a.only != "2d":
+        for size in a.sizes3d:
+            for noise in a.sigmas3d:
+                for name in PHANTOMS_3D:
+                    row = case(a.bin, "3d", name, size, noise, 2, a.seed, a.out, a.repeat3d, a.methods3d)
+                    results["three_d"].append(row)
+                    print(f"{row['image']}: dsc-seg {cell(row['dsc-seg'])}", file=sys.stderr, flush=True)
+        methods = [m for m in PEER_ORDER if m in a.methods3d]
+        rows = results["three_d"]
+        print("## 3D\n\n" + full_table(rows, methods) + "\n")
+        for method in ["dsc-seg"] + methods:
+            dice = [r[method]["mean_dice"] for r in rows if method in r]
+            if dice:
+                print(f"{method}: mean Dice {np.mean(dice):.4f} (min {np.min(dice):.4f}) over {len(dice)} volumes")
+        print()
+    if a.memory:
+        table, results["memory"] = memory_table(a.bin, a.out, a.memory)
+        print("## Peak memory\n\n" + table + "\n")
+    with open(os.path.join(a.out, "results.json"), "w") as f:
+        json.dump(results, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
