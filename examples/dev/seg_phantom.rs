@@ -1,5 +1,5 @@
-//! Segments the harness phantoms in-process and prints Dice and time
-//! (a quick way to tune defaults; `dsc-seg` + `peers.py score` is the reference).
+//! Segments the benchmark phantoms in-process and prints Dice and time
+//! (a quick check while developing; `benches/compare/compare.py` is the reference).
 //!
 //! `cargo run --release --example seg_phantom -- [two_phase|four_phase|...] [size] [sigma] [L]`
 

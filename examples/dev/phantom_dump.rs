@@ -1,6 +1,6 @@
-//! Writes every 2D phantom as binary PGM files (image and ground truth with
-//! the `peers.py` gray values) for external checks, e.g. against
-//! `peers.py` geometry:
+//! Writes every 2D phantom as binary PGM files (image, and ground truth with
+//! phase `k` as gray `k·255/(N−1)`) for checks by other programs, e.g. a
+//! NumPy transcription of the geometry:
 //!
 //! `cargo run --release --example phantom_dump -- OUT_DIR [SIZE...] [--sigma S] [--seed N] [--3d N]`
 //!
