@@ -1,6 +1,6 @@
 //! The classical snake's edge force on the DSC (Kass et al.).
 //!
-//! The initial contour is the true outline of the harness's two-phase
+//! The initial contour is the true outline of the benchmark two-phase
 //! phantom grown by 3 pixels (as a user's rough outline, or a previous
 //! frame's result, would be). No region force and no label flips: only
 //!

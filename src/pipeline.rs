@@ -395,7 +395,7 @@ pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
 }
 
 /// Writes phantom `name` (`NAME.png`, ground truth `NAME_gt.png` with phase
-/// `k` as `k·255/(N−1)` like `peers.py`, and `NAME_labels.png` with raw phase
+/// `k` as `k·255/(N−1)`, and `NAME_labels.png` with raw phase
 /// indices) into `out`; fig6 also gets `NAME_init.png` (its two initial
 /// regions as labels, for `--init labels`). Returns the file names written.
 pub fn run_phantom(

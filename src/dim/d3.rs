@@ -34,7 +34,7 @@ impl Dim for D3 {
     fn signed_measure(p: &[Self::Point]) -> f64 {
         (p[1] - p[0]).cross(&(p[2] - p[0])).dot(&(p[3] - p[0])) / 6.0
     }
-    /// q = 6·sqrt(2)·V / l_rms³, the method doc's tet quality (1 for the regular tet).
+    /// q = 6·sqrt(2)·V / l_rms³, the DSC's tet quality (1 for the regular tet).
     fn quality(p: &[Self::Point]) -> f64 {
         if Self::orient(p) <= 0.0 {
             return 0.0;

@@ -60,7 +60,8 @@ pub trait Dim: sealed::Sealed + Copy + Clone + Debug + Default + Send + Sync + '
     fn quality_at_least(p: &[Self::Point], q_min: f64) -> bool {
         Self::quality(p) >= q_min
     }
-    /// Measure of the regular cell with edge length `l` (A or V of the method doc).
+    /// Measure of the regular cell with edge length `l`: the DSC's average
+    /// cell area `A = √3/4·l²` (2D) or volume `V = √2/12·l³` (3D).
     fn regular_measure(l: f64) -> f64;
     /// Unit normal of the facet opposite corner `opposite`, pointing away from that corner.
     fn facet_normal(p: &[Self::Point], opposite: usize) -> Self::Point;

@@ -65,7 +65,7 @@ pub struct DeformReport {
 }
 
 impl<K: Connectivity> Complex<K> {
-    /// The DSC deformation (`shared/docs/dsc-method.md`, section 3): each vertex
+    /// The DSC deformation: each vertex
     /// with a destination moves as far as it can without inverting a cell, one
     /// vertex at a time; the mesh is improved; this repeats until every vertex has
     /// arrived or `max_rounds` is reached; then the mesh is resized and improved,

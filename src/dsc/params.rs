@@ -20,7 +20,7 @@ pub struct ParamError {
 /// Thresholds of the deformable simplicial complex. Lengths are multiples of
 /// the average edge length `L`, measures multiples of the regular cell's
 /// measure `A(L)`, qualities in `[0, 1]` (see [`Dim::quality`]). The defaults are
-/// the reference implementations' (see `shared/docs/dsc-method.md`, section 2).
+/// those of the original 2D and 3D DSC libraries (Misztal, Bærentzen et al.).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DscParams {
     /// Average edge length `L`, the one user parameter (pixels/voxels).

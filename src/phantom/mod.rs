@@ -3,13 +3,14 @@
 //! Every phantom is a label image (the ground truth) rendered to
 //! intensities by mapping each phase to a level, a Gaussian edge blur
 //! ([`blur`]), additive Gaussian noise from a seeded ChaCha RNG, clipping to
-//! `[0, 1]` and (by default) 8-bit quantisation ([`noise`]), the same
-//! pipeline as `peers.py gen` of the benchmark harness.
+//! `[0, 1]` and (by default) 8-bit quantisation ([`noise`]). These are the
+//! benchmark phantoms of `benches/compare` (written by `dsc-seg phantom`).
 //!
 //! Geometry is defined in normalised coordinates: pixel `i` of an `n`-pixel
 //! axis has centre `(i + 0.5) / n`, so `size` scales every shape.
-//! [`shapes2d::two_phase`] and [`shapes2d::four_phase`] reproduce the
-//! harness label images pixel for pixel.
+//! [`shapes2d::two_phase`] and [`shapes2d::four_phase`] agree pixel for
+//! pixel with a NumPy transcription of the same shapes (tests below), so
+//! Python peers may generate them too.
 //!
 //! This module depends on no other module of the crate.
 
@@ -23,13 +24,13 @@ pub use shapes2d::{
 };
 pub use shapes3d::Phantom3Kind;
 
-/// Default Gaussian edge blur in pixels (the `--blur` default of `peers.py gen`).
+/// Default Gaussian edge blur in pixels.
 pub const DEFAULT_BLUR_PX: f64 = 1.5;
 
-/// Phase levels of the two-phase phantoms (as in `peers.py`).
+/// Phase levels of the two-phase phantoms.
 pub const TWO_PHASE_LEVELS: [f64; 2] = [0.3, 0.7];
 
-/// Phase levels of the four-phase phantoms (as in `peers.py`).
+/// Phase levels of the four-phase phantoms.
 pub const FOUR_PHASE_LEVELS: [f64; 4] = [0.2, 0.4, 0.6, 0.8];
 
 /// How a label image is turned into an intensity image.
@@ -41,12 +42,12 @@ pub struct RenderOptions {
     pub noise_sigma: f64,
     /// Seed of the ChaCha noise RNG.
     pub seed: u64,
-    /// Round intensities to the 8-bit grid `k / 255` (as the harness PNGs are).
+    /// Round intensities to the 8-bit grid `k / 255` (as the phantoms' PNGs are).
     pub quantize_8bit: bool,
 }
 
 impl RenderOptions {
-    /// Harness defaults: [`DEFAULT_BLUR_PX`] blur and 8-bit quantisation.
+    /// The benchmark phantoms' rendering: [`DEFAULT_BLUR_PX`] blur and 8-bit quantisation.
     pub fn new(noise_sigma: f64, seed: u64) -> Self {
         Self {
             blur_px: DEFAULT_BLUR_PX,
@@ -152,8 +153,8 @@ impl Phantom2 {
         self.image.iter().map(|&v| noise::to_u8(v as f64)).collect()
     }
 
-    /// The truth as 8-bit gray values spread over `0..=255` exactly as
-    /// `peers.py` writes `*_gt.png` (phase `k` ↦ `k · (255 / (phases - 1))`).
+    /// The truth as 8-bit gray values spread over `0..=255` as in
+    /// `*_gt.png` (phase `k` ↦ `k · (255 / (phases - 1))`).
     pub fn truth_gray(&self) -> Vec<u8> {
         truth_gray(&self.truth, self.phases)
     }
@@ -254,7 +255,7 @@ fn fractions(truth: &[u8], phases: usize) -> Vec<f64> {
 }
 
 /// Phase labels as 8-bit gray values, `k ↦ k · (255 / max(phases - 1, 1))`
-/// (the `label_to_png_values` of `peers.py`).
+/// (the `*_gt.png` of `dsc-seg phantom`).
 pub fn truth_gray(truth: &[u8], phases: usize) -> Vec<u8> {
     let step = 255 / phases.saturating_sub(1).max(1);
     truth.iter().map(|&l| (l as usize * step) as u8).collect()
@@ -317,10 +318,10 @@ mod tests {
     }
 
     /// Values computed with `two_phase_labels(64)` / `four_phase_labels(64)`
-    /// of `/work/shared/bench/peers.py` (numpy 2.4.6): per-phase counts, an
+    /// of a NumPy transcription of the shapes (numpy 2.4.6): per-phase counts, an
     /// FNV-1a hash of the row-major label bytes and a few (row, col) labels.
     #[test]
-    fn harness_geometry_matches_peers_py_at_64() {
+    fn geometry_matches_numpy_at_64() {
         let two = two_phase_labels(64);
         assert_eq!(phase_counts(&two, 2), vec![3162, 934]);
         assert_eq!(fnv1a(&two), 0xb6f5debc57c57fc9);
@@ -346,7 +347,8 @@ mod tests {
     }
 
     /// FNV-1a of the noise-free 8-bit renders, from
-    /// `peers.render(labels(64), levels, 0.0, 1.5, 0)` (SciPy 1.17.1); the
+    /// the NumPy render (levels, `scipy.ndimage.gaussian_filter` with σ = 1.5 px
+    /// and `mode="nearest"`, no noise, `rint(v · 255)`; SciPy 1.17.1); the
     /// blur reproduces SciPy's summation order, so even the 76.5 / 178.5
     /// rounding ties of the 0.3 / 0.7 levels come out the same.
     #[test]

@@ -1,5 +1,5 @@
 //! Additive Gaussian noise (seeded ChaCha RNG), clipping and 8-bit
-//! quantisation, as in the `peers.py` harness.
+//! quantisation of the phantoms.
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -39,7 +39,7 @@ pub fn clip_unit(image: &mut [f32]) {
     }
 }
 
-/// Converts a `[0, 1]` sample to 8 bit like the harness:
+/// Converts a `[0, 1]` sample to 8 bit like NumPy's `rint`:
 /// `rint(clip(v, 0, 1) · 255)` with ties to even.
 pub fn to_u8(v: f64) -> u8 {
     let c = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };

@@ -1,4 +1,4 @@
-//! 2D phantoms: the harness phantoms (`two_phase`, `four_phase`) and
+//! 2D phantoms: the benchmark phantoms (`two_phase`, `four_phase`) and
 //! inputs in the style of the ICPR 2014 DSC multiphase-segmentation figures.
 //!
 //! All geometry is in normalised coordinates with pixel centres at
@@ -34,10 +34,11 @@ fn label_map(n: usize, f: impl Fn(f64, f64) -> u8) -> Vec<u8> {
     out
 }
 
-/// Ground truth of `peers.py two_phase_labels(n)` (0 background, 1
+/// Ground truth of the two-phase benchmark phantom (0 background, 1
 /// foreground): disk, annulus, plate with a square and a round hole, two
 /// squares touching at one corner, rotated ellipse, thin bar.
-// Comparisons are written exactly as in peers.py to keep the mirror auditable.
+// Comparisons are written as in the NumPy transcription (strict or not) so that
+// both give the same pixels.
 #[allow(clippy::manual_range_contains)]
 pub fn two_phase_labels(n: usize) -> Vec<u8> {
     let th = 30f64.to_radians();
@@ -62,10 +63,11 @@ pub fn two_phase_labels(n: usize) -> Vec<u8> {
     })
 }
 
-/// Ground truth of `peers.py four_phase_labels(n)` (phases 0..=3): a disk
+/// Ground truth of the four-phase benchmark phantom (phases 0..=3): a disk
 /// cut into three 120° sectors, a square partly covered by a disk, three
 /// stripes on background, and a ring around a core.
-// Comparisons are written exactly as in peers.py to keep the mirror auditable.
+// Comparisons are written as in the NumPy transcription (strict or not) so that
+// both give the same pixels.
 #[allow(clippy::manual_range_contains)]
 pub fn four_phase_labels(n: usize) -> Vec<u8> {
     label_map(n, |x, y| {
@@ -109,14 +111,14 @@ pub fn four_phase_labels(n: usize) -> Vec<u8> {
     })
 }
 
-/// The harness two-phase phantom: [`two_phase_labels`] with levels
+/// The two-phase benchmark phantom: [`two_phase_labels`] with levels
 /// (0.3, 0.7), 1.5 px blur, noise, 8-bit quantisation.
 pub fn two_phase(size: usize, noise_sigma: f64, seed: u64) -> Phantom2 {
     let opts = RenderOptions::new(noise_sigma, seed);
     Phantom2::from_labels(size, size, two_phase_labels(size), &TWO_PHASE_LEVELS, &opts)
 }
 
-/// The harness four-phase phantom: [`four_phase_labels`] with levels
+/// The four-phase benchmark phantom: [`four_phase_labels`] with levels
 /// (0.2, 0.4, 0.6, 0.8), 1.5 px blur, noise, 8-bit quantisation.
 pub fn four_phase(size: usize, noise_sigma: f64, seed: u64) -> Phantom2 {
     let opts = RenderOptions::new(noise_sigma, seed);
@@ -374,9 +376,9 @@ pub fn fig6_initial_labels(size: usize) -> Vec<u8> {
 /// The 2D phantoms by name (for `dsc-seg phantom NAME`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Phantom2Kind {
-    /// [`two_phase`] (harness geometry).
+    /// [`two_phase`] (benchmark geometry).
     TwoPhase,
-    /// [`four_phase`] (harness geometry).
+    /// [`four_phase`] (benchmark geometry).
     FourPhase,
     /// [`fig2`]: crossings and holes.
     Fig2,

@@ -219,7 +219,7 @@ impl SegmentParams {
     /// 9 towards), and the rigidity needed the next ~18 iterations to smooth each
     /// bump back, longer than the 5 quiet iterations the stopping rule waits for.
     /// With each voxel flipped at most once the rounds flip fewer cells each time
-    /// (`examples/flips3d.rs`: 139, 88, 46, …, 6) and all six 64³ phantoms stop by
+    /// (`examples/dev/flips3d.rs`: 139, 88, 46, …, 6) and all six 64³ phantoms stop by
     /// convergence: σ = 0.2 two balls 179 iterations (Dice 0.9833 → 0.9838), torus
     /// 178 (0.9812 → 0.9814), hollow sphere 294 (0.9781 → 0.9788); σ = 0.1 76, 57,
     /// 78 iterations, Dice 0.9924, 0.9888, 0.9836 (within ±0.0003 of before).

@@ -82,7 +82,7 @@ fn two_phase_phantom_defaults() {
     assert_energy_decreases(&r.report);
 }
 
-/// A four-phase run that converged, lowered its energy, kept the harness
+/// A four-phase run that converged, lowered its energy, kept the benchmark
 /// phantom's triple junctions (Y disk: 4, square+disk: 2, stripes: 4; at
 /// least 6 must survive as eq. (7) junctions) and reached `min_dice`.
 fn assert_four_phase_run(r: &Run, min_dice: f64) {
@@ -122,7 +122,7 @@ fn literal_paper_junction_force_finds_triple_junctions() {
     // eq. (7) read literally (the junction's phases bracket every sample)
     // also keeps the junctions. The default per-sample reading stays within
     // 0.005 Dice of it on this small phantom (0.958 against 0.962 measured);
-    // on the 256² harness phantoms it is clearly better (benches/RESULTS.md)
+    // on the 256² benchmark phantoms it is clearly better (benches/RESULTS.md)
     let ph = Phantom2Kind::FourPhase.generate(128, 0.1, 3);
     let default = run(&ph, SegmentParams::new(4));
     assert_eq!(
