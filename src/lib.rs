@@ -135,6 +135,7 @@
 #![warn(missing_docs)]
 #![deny(rustdoc::broken_intra_doc_links)]
 
+pub mod batch;
 pub mod complex;
 pub mod dim;
 pub mod dsc;
@@ -142,9 +143,12 @@ pub mod error;
 pub mod figures;
 pub mod io;
 pub mod ops;
+pub mod options;
 pub mod phantom;
 pub mod pipeline;
 pub mod pipeline3d;
 pub mod segment;
+pub mod segmented;
+pub mod staging;
 
 pub use error::{Error, Result};

@@ -3,13 +3,16 @@
 //!
 //! Outputs are first written into a hidden staging directory inside the
 //! output directory and only renamed into place once all of them exist, so a
-//! failure leaves the directory as it was.
+//! failure leaves the directory as it was (see [`crate::staging`]). The run
+//! itself is [`segment_image`], which the Python package calls directly.
 
 use crate::dim::D2;
 use crate::error::{Error, Result};
-use crate::io::{save_gray8_png, write_bytes_atomic, write_vtu, CellArray, Cells, Image2, Overlay};
+use crate::io::{save_gray8_png, Image2, Overlay};
 use crate::phantom::{self, Phantom2Kind};
 use crate::segment::{ImageView, Init, Raster, SegmentParams, SegmentReport, Segmentation};
+use crate::segmented::{Outputs, Render, Segmented};
+use crate::staging::Staging;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::ops::RangeInclusive;
@@ -33,6 +36,8 @@ pub enum Source {
         /// RNG seed.
         seed: u64,
     },
+    /// An array handed over in memory (the Python package).
+    Array,
 }
 
 /// A segmentation job.
@@ -47,8 +52,44 @@ pub struct SegmentJob {
     pub params: SegmentParams,
     /// Label PNG for `Init::Labels`.
     pub init_labels: Option<PathBuf>,
+    /// The files to write.
+    pub outputs: Outputs,
     /// No progress bar.
     pub quiet: bool,
+}
+
+/// A phantom's true labels (phases by increasing mean).
+#[derive(Clone, Debug)]
+pub struct GroundTruth {
+    /// Phase per pixel or voxel.
+    pub labels: Vec<u8>,
+    /// Number of phases.
+    pub phases: usize,
+}
+
+/// What a report says about a run's input beyond the image itself.
+#[derive(Clone, Debug)]
+pub struct Provenance {
+    /// Where the image came from.
+    pub source: Source,
+    /// The label file `Init::Labels` was loaded from.
+    pub init_labels: Option<PathBuf>,
+    /// The ground truth, for the report's Dice score.
+    pub truth: Option<GroundTruth>,
+    /// Seconds spent loading the input.
+    pub load_seconds: f64,
+}
+
+impl Provenance {
+    /// An in-memory input without ground truth.
+    pub fn array() -> Self {
+        Provenance {
+            source: Source::Array,
+            init_labels: None,
+            truth: None,
+            load_seconds: 0.0,
+        }
+    }
 }
 
 /// Seconds per stage of a job.
@@ -207,34 +248,6 @@ pub(crate) fn check_phantom(
     Ok(())
 }
 
-/// Checks that `dir` can hold our outputs: creates it, then a staging directory in it.
-pub(crate) fn staging(dir: &Path) -> Result<tempfile::TempDir> {
-    let err = |reason: String| Error::OutputDir {
-        path: dir.to_path_buf(),
-        reason,
-    };
-    if dir.exists() && !dir.is_dir() {
-        return Err(err("it exists and is not a directory".into()));
-    }
-    std::fs::create_dir_all(dir).map_err(|e| err(e.to_string()))?;
-    tempfile::Builder::new()
-        .prefix(".dsc-seg-staging-")
-        .tempdir_in(dir)
-        // The error text would name the random staging path; its kind says it all.
-        .map_err(|e| err(std::io::Error::from(e.kind()).to_string()))
-}
-
-/// Moves every file of the staging directory into `dir`.
-pub(crate) fn publish(stage: tempfile::TempDir, dir: &Path, names: &[&str]) -> Result<()> {
-    for name in names {
-        std::fs::rename(stage.path().join(name), dir.join(name)).map_err(|e| Error::OutputDir {
-            path: dir.to_path_buf(),
-            reason: format!("{name}: {e}"),
-        })?;
-    }
-    Ok(())
-}
-
 /// Loads a label PNG: 8-bit values are the labels.
 fn load_labels(path: &Path, width: usize, height: usize, phases: usize) -> Result<Vec<u8>> {
     let img = Image2::load(path)?;
@@ -300,13 +313,10 @@ pub fn mean_dice(pred: &[u8], truth: &[u8], phases: usize) -> f64 {
     total / phases as f64
 }
 
-/// Runs a segmentation job and writes `labels.png`, `overlay.png`,
-/// `overlay.svg`, `mesh.vtu` and `report.json` into the output directory.
-pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
-    let t_load = Instant::now();
-    let mut params = job.params.clone();
-    let (image, truth) = match &job.source {
-        Source::File(path) => (Image2::load(path)?, None),
+/// Loads (or generates) a 2D input, with the phantom's ground truth.
+pub fn load_image(source: &Source) -> Result<(Image2, Option<GroundTruth>)> {
+    match source {
+        Source::File(path) => Ok((Image2::load(path)?, None)),
         Source::Phantom {
             name,
             size,
@@ -317,59 +327,99 @@ pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
                 .ok_or_else(|| Error::Usage(format!("unknown phantom {name:?}")))?;
             check_phantom("phantom", *size, *noise, PHANTOM2_SIZES)?;
             let ph = kind.generate(*size, *noise, *seed);
-            (
-                Image2::from_raw(ph.width, ph.height, ph.image.clone()),
-                Some(ph),
-            )
+            let truth = GroundTruth {
+                labels: ph.truth,
+                phases: ph.phases,
+            };
+            Ok((Image2::from_raw(ph.width, ph.height, ph.image), Some(truth)))
         }
-    };
-    let (w, h) = image.dims();
-    if let Init::Labels { labels } = &mut params.init {
-        let path = job
-            .init_labels
-            .as_ref()
-            .ok_or_else(|| Error::Usage("--init labels needs --init-labels PNG".into()))?;
-        *labels = load_labels(path, w, h, params.phases)?;
+        Source::Array => Err(Error::Usage(
+            "an in-memory image has no file to load".into(),
+        )),
     }
-    let load = t_load.elapsed().as_secs_f64();
+}
 
-    // Validate everything (and the output directory) before any work.
+/// `params` with the labels of `Init::Labels` loaded from `init_labels`
+/// (a label PNG of `width × height`).
+pub fn with_init_labels(
+    mut params: SegmentParams,
+    init_labels: Option<&Path>,
+    (width, height): (usize, usize),
+) -> Result<SegmentParams> {
+    if let Init::Labels { labels } = &mut params.init {
+        let path = init_labels
+            .ok_or_else(|| Error::Usage("--init labels needs --init-labels PNG".into()))?;
+        *labels = load_labels(path, width, height, params.phases)?;
+    }
+    Ok(params)
+}
+
+/// Runs a segmentation job and writes its outputs (all: `labels.png`,
+/// `overlay.png`, `overlay.svg`, `mesh.vtu` and `report.json`) into the
+/// output directory.
+pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
+    let t_load = Instant::now();
+    let (image, truth) = load_image(&job.source)?;
+    let params = with_init_labels(job.params.clone(), job.init_labels.as_deref(), image.dims())?;
+    let provenance = Provenance {
+        source: job.source.clone(),
+        init_labels: job.init_labels.clone(),
+        truth,
+        load_seconds: t_load.elapsed().as_secs_f64(),
+    };
+    // The output directory is checked after the parameters, before any work.
+    let (result, stage) = segment_image_then(&image, params, provenance, job.quiet, || {
+        Staging::new(&job.out)
+    })?;
+    result.write_staged(stage, &job.out, &job.outputs)?;
+    Ok(result.summary)
+}
+
+/// Segments an image held in memory (the parameters' `Init::Labels`, if
+/// any, already loaded): the labels, the final mesh and the report.
+pub fn segment_image(
+    image: &Image2,
+    params: SegmentParams,
+    provenance: Provenance,
+    quiet: bool,
+) -> Result<Segmented> {
+    segment_image_then(image, params, provenance, quiet, || Ok(())).map(|(s, ())| s)
+}
+
+/// [`segment_image`], calling `ready` once the input and parameters are
+/// validated, before the run (to check the output directory first).
+pub(crate) fn segment_image_then<T>(
+    image: &Image2,
+    params: SegmentParams,
+    provenance: Provenance,
+    quiet: bool,
+    ready: impl FnOnce() -> Result<T>,
+) -> Result<(Segmented, T)> {
+    let (w, h) = image.dims();
     let view = ImageView::new_2d(w, h, image.data())
         .ok_or_else(|| Error::Usage("image buffer does not match its size".into()))?;
     let t_seg = Instant::now();
     let mut seg = Segmentation::<D2>::new(view, params.clone())?;
-    let stage = staging(&job.out)?;
+    let ready = ready()?;
 
-    let report = run_with_progress(&mut seg, params.max_iterations, job.quiet);
+    let report = run_with_progress(&mut seg, params.max_iterations, quiet);
     let segment = t_seg.elapsed().as_secs_f64();
 
-    let t_write = Instant::now();
     let labels = seg.label_image();
-    let (points2, tris, phase) = overlay_arrays(&seg);
-    let phase_i32: Vec<i32> = phase.iter().map(|&p| p as i32).collect();
-    let dir = stage.path();
-    save_gray8_png(dir.join("labels.png"), w, h, &labels)?;
-    let overlay = Overlay::new(&image, &points2, &tris, &phase);
-    overlay.to_png(dir.join("overlay.png"))?;
-    overlay.to_svg(dir.join("overlay.svg"))?;
-    write_vtu(
-        dir.join("mesh.vtu"),
-        &crate::io::vtk::points_2d_to_3d(&points2),
-        Cells::Triangles(&tris),
-        &[("phase", CellArray::I32(&phase_i32))],
-    )?;
-    let truth_dice = truth
+    let (points, tris, phase) = overlay_arrays(&seg);
+    let truth_dice = provenance
+        .truth
         .as_ref()
-        .map(|ph| mean_dice(&labels, &ph.truth, ph.phases));
+        .map(|t| mean_dice(&labels, &t.labels, t.phases));
     let times = JobTimes {
-        load,
+        load: provenance.load_seconds,
         segment,
-        write: t_write.elapsed().as_secs_f64(),
+        write: 0.0,
     };
     let rep = Report {
         run: RunReport::new(
             "dsc-seg",
-            (&job.source, job.init_labels.as_deref()),
+            (&provenance.source, provenance.init_labels.as_deref()),
             &seg,
             &report,
             times,
@@ -378,20 +428,18 @@ pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
         width: w,
         height: h,
     };
-    let json = serde_json::to_vec_pretty(&rep).map_err(|e| Error::Usage(e.to_string()))?;
-    write_bytes_atomic(dir.join("report.json"), &json)?;
-    publish(
-        stage,
-        &job.out,
-        &[
-            "labels.png",
-            "overlay.png",
-            "overlay.svg",
-            "mesh.vtu",
-            "report.json",
-        ],
-    )?;
-    Ok(report)
+    let report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
+    let result = Segmented {
+        dims: vec![w, h],
+        labels,
+        vertices: points.iter().flatten().copied().collect(),
+        cells: tris.iter().flatten().copied().collect(),
+        cell_phases: phase.iter().map(|&p| p as u8).collect(),
+        summary: report,
+        report: report_json,
+        render: Render::Image(image.clone()),
+    };
+    Ok((result, ready))
 }
 
 /// Writes phantom `name` (`NAME.png`, ground truth `NAME_gt.png` with phase
@@ -413,7 +461,7 @@ pub fn run_phantom(
         ))
     })?;
     check_phantom("phantom", size, noise, PHANTOM2_SIZES)?;
-    let stage = staging(out)?;
+    let stage = Staging::new(out)?;
     let ph = kind.generate(size, noise, seed);
     let base = kind.name();
     let dir = stage.path();
@@ -435,6 +483,6 @@ pub fn run_phantom(
         )?;
     }
     let refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    publish(stage, out, &refs)?;
+    stage.publish(out, &refs)?;
     Ok(names)
 }

@@ -6,13 +6,16 @@
 
 use crate::dim::D3;
 use crate::error::{Error, Result};
-use crate::io::{save_labels_tiff, write_bytes_atomic, Volume};
+use crate::io::{save_labels_tiff, Volume};
 use crate::phantom::noise::to_u8;
 use crate::phantom::Phantom3Kind;
 use crate::pipeline::{
-    check_phantom, mean_dice, publish, run_with_progress, staging, JobTimes, RunReport, Source,
+    check_phantom, mean_dice, run_with_progress, GroundTruth, JobTimes, Provenance, RunReport,
+    Source,
 };
 use crate::segment::{ImageView, Init, SegmentParams, SegmentReport, Segmentation};
+use crate::segmented::{Outputs, Render, Segmented};
+use crate::staging::Staging;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -34,6 +37,8 @@ pub struct Segment3dJob {
     /// tetrahedralised by TetGen to conform to it, phase 1 inside and 0
     /// outside, and `params.init` is not used. Needs the `tetgen` feature.
     pub init_surface: Option<PathBuf>,
+    /// The files to write.
+    pub outputs: Outputs,
     /// No progress bar.
     pub quiet: bool,
 }
@@ -113,15 +118,10 @@ fn load_label_volume(path: &Path, dims: [usize; 3], phases: usize) -> Result<Vec
     Ok(labels)
 }
 
-/// Runs a 3D segmentation job and writes `labels.tif` (multi-page 8-bit,
-/// value = phase index, phases by increasing mean), `mesh.vtu` (tetrahedra,
-/// cell data `phase`), `interface.vtp` (interface triangles, cell data
-/// `phase` and `phase_other`) and `report.json` into the output directory.
-pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
-    let t_load = Instant::now();
-    let mut params = job.params.clone();
-    let (volume, truth) = match &job.source {
-        Source::File(path) => (Volume::load(path)?, None),
+/// Loads (or generates) a 3D input, with the phantom's ground truth.
+pub fn load_volume(source: &Source) -> Result<(Volume, Option<GroundTruth>)> {
+    match source {
+        Source::File(path) => Ok((Volume::load(path)?, None)),
         Source::Phantom {
             name,
             size,
@@ -131,69 +131,146 @@ pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
             let kind = phantom_kind(name)?;
             check_phantom("3D phantom", *size, *noise, PHANTOM3_SIZES)?;
             let ph = kind.generate(*size, *noise, *seed);
-            (
-                Volume::from_raw(ph.nx, ph.ny, ph.nz, ph.image.clone()),
-                Some(ph.truth),
-            )
+            let phases = ph.truth.iter().max().map_or(1, |&m| m as usize + 1);
+            Ok((
+                Volume::from_raw(ph.nx, ph.ny, ph.nz, ph.image),
+                Some(GroundTruth {
+                    labels: ph.truth,
+                    phases,
+                }),
+            ))
         }
-    };
-    let dims = volume.dims();
+        Source::Array => Err(Error::Usage(
+            "an in-memory volume has no file to load".into(),
+        )),
+    }
+}
+
+/// `params` with the labels of `Init::Labels` loaded from `init_labels`
+/// (a label volume of size `dims`).
+pub fn with_init_labels3(
+    mut params: SegmentParams,
+    init_labels: Option<&Path>,
+    dims: [usize; 3],
+) -> Result<SegmentParams> {
     if let Init::Labels { labels } = &mut params.init {
-        let path = job
-            .init_labels
-            .as_ref()
+        let path = init_labels
             .ok_or_else(|| Error::Usage("--init labels needs --init-labels VOLUME".into()))?;
         *labels = load_label_volume(path, dims, params.phases)?;
     }
-    let load_seconds = t_load.elapsed().as_secs_f64();
+    Ok(params)
+}
 
+/// Runs a 3D segmentation job and writes its outputs (all: `labels.tif`,
+/// multi-page 8-bit, value = phase index, phases by increasing mean;
+/// `mesh.vtu`, tetrahedra with cell data `phase`; `interface.vtp`, interface
+/// triangles with cell data `phase` and `phase_other`; `report.json`) into
+/// the output directory.
+pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
+    let t_load = Instant::now();
+    let (volume, truth) = load_volume(&job.source)?;
+    let params = with_init_labels3(
+        job.params.clone(),
+        job.init_labels.as_deref(),
+        volume.dims(),
+    )?;
+    let provenance = Provenance {
+        source: job.source.clone(),
+        init_labels: job.init_labels.clone(),
+        truth,
+        load_seconds: t_load.elapsed().as_secs_f64(),
+    };
+    let (result, stage) = segment_volume_then(
+        &volume,
+        params,
+        provenance,
+        job.init_surface.as_deref(),
+        job.quiet,
+        || Staging::new(&job.out),
+    )?;
+    result.write_staged(stage, &job.out, &job.outputs)?;
+    Ok(result.summary)
+}
+
+/// Segments a volume held in memory (the parameters' `Init::Labels`, if any,
+/// already loaded; `init_surface` as [`Segment3dJob::init_surface`]): the
+/// labels, the final mesh and the report.
+pub fn segment_volume(
+    volume: &Volume,
+    params: SegmentParams,
+    provenance: Provenance,
+    init_surface: Option<&Path>,
+    quiet: bool,
+) -> Result<Segmented> {
+    segment_volume_then(volume, params, provenance, init_surface, quiet, || Ok(())).map(|(s, ())| s)
+}
+
+/// [`segment_volume`], calling `ready` once the input and parameters are
+/// validated, before the run (to check the output directory first).
+pub(crate) fn segment_volume_then<T>(
+    volume: &Volume,
+    params: SegmentParams,
+    provenance: Provenance,
+    init_surface: Option<&Path>,
+    quiet: bool,
+    ready: impl FnOnce() -> Result<T>,
+) -> Result<(Segmented, T)> {
+    let dims = volume.dims();
     let view = ImageView::new_3d(dims, volume.data())
         .ok_or_else(|| Error::Usage("volume buffer does not match its size".into()))?;
     let t_seg = Instant::now();
-    let mut seg = match &job.init_surface {
+    let mut seg = match init_surface {
         None => Segmentation::<D3>::new(view, params.clone())?,
         Some(path) => surface_segmentation(view, params.clone(), path)?,
     };
-    let stage = staging(&job.out)?;
-    let report = run_with_progress(&mut seg, params.max_iterations, job.quiet);
+    let ready = ready()?;
+    let report = run_with_progress(&mut seg, params.max_iterations, quiet);
     let segment_seconds = t_seg.elapsed().as_secs_f64();
 
-    let t_write = Instant::now();
     let labels = seg.label_image();
     let order = seg.phase_order();
     let complex = seg.complex();
-    let dir = stage.path();
-    save_labels_tiff(dir.join("labels.tif"), dims, &labels)?;
-    complex.write_mesh_vtu(dir.join("mesh.vtu"), &order)?;
-    complex.write_interface_vtp(dir.join("interface.vtp"), &order)?;
-    let truth_dice = truth.map(|t| mean_dice(&labels, &t, params.phases));
+    let truth_dice = provenance
+        .truth
+        .as_ref()
+        .map(|t| mean_dice(&labels, &t.labels, params.phases));
     let times = JobTimes {
-        load: load_seconds,
+        load: provenance.load_seconds,
         segment: segment_seconds,
-        write: t_write.elapsed().as_secs_f64(),
+        write: 0.0,
     };
     let rep = Report {
         run: RunReport::new(
             "dsc-seg segment3d",
-            (&job.source, job.init_labels.as_deref()),
+            (&provenance.source, provenance.init_labels.as_deref()),
             &seg,
             &report,
             times,
             truth_dice,
         ),
         dims,
-        init_surface: job.init_surface.as_deref(),
+        init_surface,
         junction_edges: complex.junction_edges().len(),
         quality: quality(complex),
     };
-    let json = serde_json::to_vec_pretty(&rep).map_err(|e| Error::Usage(e.to_string()))?;
-    write_bytes_atomic(dir.join("report.json"), &json)?;
-    publish(
-        stage,
-        &job.out,
-        &["labels.tif", "mesh.vtu", "interface.vtp", "report.json"],
-    )?;
-    Ok(report)
+    let report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
+    let arrays = complex.to_arrays();
+    let cell_phases = arrays
+        .labels
+        .iter()
+        .map(|&l| order[(l as usize).min(order.len() - 1)])
+        .collect();
+    let result = Segmented {
+        dims: dims.to_vec(),
+        labels,
+        vertices: arrays.points.iter().flatten().copied().collect(),
+        cells: arrays.connectivity,
+        cell_phases,
+        summary: report,
+        report: report_json,
+        render: Render::Volume(Box::new(complex.clone()), order),
+    };
+    Ok((result, ready))
 }
 
 /// A segmentation starting from a TetGen mesh conforming to the surface in `path`.
@@ -239,7 +316,7 @@ pub fn run_phantom3d(
 ) -> Result<Vec<String>> {
     let kind = phantom_kind(name)?;
     check_phantom("3D phantom", size, noise, PHANTOM3_SIZES)?;
-    let stage = staging(out)?;
+    let stage = Staging::new(out)?;
     let ph = kind.generate(size, noise, seed);
     let base = kind.name();
     let names = vec![format!("{base}.tif"), format!("{base}_labels.tif")];
@@ -248,7 +325,7 @@ pub fn run_phantom3d(
     save_labels_tiff(stage.path().join(&names[0]), dims, &image)?;
     save_labels_tiff(stage.path().join(&names[1]), dims, &ph.truth)?;
     let refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    publish(stage, out, &refs)?;
+    stage.publish(out, &refs)?;
     Ok(names)
 }
 
@@ -270,6 +347,7 @@ mod tests {
             params,
             init_labels: None,
             init_surface: None,
+            outputs: Outputs::ALL,
             quiet: true,
         };
         let report = run_segment3d(&job).unwrap();

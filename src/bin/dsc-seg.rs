@@ -1,9 +1,11 @@
 //! The `dsc-seg` command line: argument parsing only; the library does the work.
 
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Parser, Subcommand};
+use dsc_seg::batch::{expand_inputs, is_batch_folder, Batch, Shard, Status, Task};
+use dsc_seg::options::{one_line, Segment3dOptions, SegmentOptions};
 use dsc_seg::pipeline::{run_phantom, run_segment, SegmentJob, Source};
 use dsc_seg::pipeline3d::{run_phantom3d, run_segment3d, Segment3dJob};
-use dsc_seg::segment::{Init, InitBall, InitDisk, JunctionForce, SegmentParams};
+use dsc_seg::segmented::Outputs;
 use dsc_seg::Error;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -18,72 +20,62 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Segment an image (or, without IMAGE, a built-in phantom) into N phases.
+    /// Segment images (or, without IMAGE, a built-in phantom) into N phases.
     ///
-    /// Writes labels.png (phase index 0..N-1 ordered by increasing mean),
-    /// overlay.png and overlay.svg, mesh.vtu (cell data `phase`) and
-    /// report.json into --out.
+    /// One image: writes labels.png (phase index 0..N-1 ordered by
+    /// increasing mean), overlay.png and overlay.svg, mesh.vtu (cell data
+    /// `phase`) and report.json into --out. Several images or a folder: the
+    /// same into --out/<stem>/ per image, and --out/summary.csv.
     Segment(SegmentArgs),
     /// Write a phantom image with its ground truth (NAME.png, NAME_gt.png, NAME_labels.png).
     Phantom(PhantomArgs),
-    /// Segment a volume (or, without VOLUME, a built-in 3D phantom) into N phases
-    /// with the tetrahedral DSC.
+    /// Segment volumes (or, without VOLUME, a built-in 3D phantom) into N
+    /// phases with the tetrahedral DSC.
     ///
-    /// Writes labels.tif (multi-page 8-bit, phase index 0..N-1 ordered by
-    /// increasing mean), mesh.vtu (tetrahedra, cell data `phase`),
-    /// interface.vtp (interface triangles, cell data `phase` and `phase_other`)
-    /// and report.json into --out.
+    /// One volume: writes labels.tif (multi-page 8-bit, phase index 0..N-1
+    /// ordered by increasing mean), mesh.vtu (tetrahedra, cell data `phase`),
+    /// interface.vtp (interface triangles, cell data `phase` and
+    /// `phase_other`) and report.json into --out. Several volumes or a folder
+    /// of volumes: the same into --out/<stem>/ per volume, and
+    /// --out/summary.csv.
     Segment3d(Segment3dArgs),
     /// Write a 3D phantom volume with its ground truth (NAME.tif, NAME_labels.tif).
     Phantom3d(Phantom3dArgs),
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
-enum Init3Kind {
-    /// Cells labelled by mean: N equal intervals of the dynamic range (bisection for N = 2).
-    Range,
-    /// Balls given with --ball, everything else phase 0.
-    Balls,
-    /// A label volume given with --init-labels.
-    Labels,
+/// The options of runs over several inputs.
+#[derive(clap::Args, Debug)]
+struct BatchArgs {
+    /// The outputs to write, comma-separated: labels, overlay (2D), mesh,
+    /// interface (3D), report, or all.
+    #[arg(long, default_value = "all")]
+    outputs: String,
+    /// Inputs segmented at once, each on one thread [default: the number of cores].
+    #[arg(long, value_name = "N")]
+    jobs: Option<usize>,
+    /// Only inputs I, I+N, I+2N, ... of the list (0 <= I < N), for job
+    /// arrays on a cluster; the summary is then summary-I-of-N.csv.
+    #[arg(long, value_name = "I/N")]
+    shard: Option<Shard>,
+    /// Redo inputs whose outputs are already complete.
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Parser, Debug)]
 #[command(allow_negative_numbers = true)]
 struct Segment3dArgs {
-    /// Input volume: a multi-page TIFF stack (8/16 bit), a folder of 2D slices, or
-    /// NIfTI (.nii, .nii.gz). Without it, a built-in 3D phantom is segmented.
-    volume: Option<PathBuf>,
+    /// Input volumes: multi-page TIFF stacks (8/16 bit), folders of 2D slices,
+    /// NIfTI (.nii, .nii.gz), or folders of these. Without any, a built-in 3D
+    /// phantom is segmented.
+    volumes: Vec<PathBuf>,
     /// Output directory (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Number of phases N, 2..=64.
-    #[arg(long, allow_hyphen_values = true, default_value_t = 2)]
-    phases: i64,
-    /// Average edge length L of the mesh in voxels [default: smallest side/64·sqrt(N-1) clamped to 3..10].
-    #[arg(long, allow_hyphen_values = true)]
-    edge_length: Option<f64>,
-    /// Initialisation.
-    #[arg(long, value_enum, default_value_t = Init3Kind::Range)]
-    init: Init3Kind,
-    /// A ball for --init balls: X,Y,Z,R in voxels, optionally ,PHASE (default 1). Repeatable.
-    #[arg(
-        long = "ball",
-        value_name = "X,Y,Z,R[,PHASE]",
-        allow_hyphen_values = true
-    )]
-    balls: Vec<String>,
-    /// Label volume for --init labels (same size as the volume, 8-bit values 0..N-1).
-    #[arg(long)]
-    init_labels: Option<PathBuf>,
-    /// Initial surface (closed triangle mesh: OFF, OBJ or STL, in voxel
-    /// coordinates strictly inside [0,nx]×[0,ny]×[0,nz]): the initial mesh is
-    /// tetrahedralised by TetGen to conform to it, phase 1 inside, 0 outside;
-    /// replaces --init. Needs a build with `--features tetgen` (AGPL-3 TetGen).
-    #[arg(long, value_name = "FILE")]
-    init_surface: Option<PathBuf>,
     #[command(flatten)]
-    evolution: EvolutionArgs,
+    options: Segment3dOptions,
+    #[command(flatten)]
+    batch: BatchArgs,
     /// Built-in 3D phantom to segment when no VOLUME is given.
     #[arg(long, default_value = "two_balls")]
     phantom: String,
@@ -120,133 +112,19 @@ struct Phantom3dArgs {
     out: PathBuf,
 }
 
-/// The evolution's options, shared by `segment` and `segment3d`.
-#[derive(clap::Args, Debug)]
-struct EvolutionArgs {
-    /// Iteration cap.
-    #[arg(long, default_value_t = 500)]
-    max_iterations: usize,
-    /// Keep every cell's label: only the interfaces move.
-    #[arg(long)]
-    no_label_flips: bool,
-    /// Try label flips every K iterations [default: 1 in 2D, 20 in 3D].
-    #[arg(long, value_name = "K")]
-    flip_interval: Option<usize>,
-    /// Rigidity weight β of eq. (2).
-    #[arg(long, allow_hyphen_values = true)]
-    rigidity: Option<f64>,
-    /// Elasticity weight α of eq. (2) (off by default, as in the paper).
-    #[arg(long, allow_hyphen_values = true)]
-    elasticity: Option<f64>,
-    /// Largest displacement per iteration as a fraction of L.
-    #[arg(long, allow_hyphen_values = true)]
-    step_fraction: Option<f64>,
-    /// Triple-junction force of eq. (7): `edge-local` (the default: each
-    /// sample bracketed by its own edge's phases) or `paper` (literal: the
-    /// junction's phases bracket every sample; grows wedges on blurred edges).
-    #[arg(long, value_enum)]
-    junction_force: Option<JunctionArg>,
-    /// Weight of the length (3D: area) term of the Mumford–Shah energy, as a
-    /// multiple of the smallest gap between phase means.
-    #[arg(long, allow_hyphen_values = true)]
-    length_weight: Option<f64>,
-}
-
-impl EvolutionArgs {
-    /// Overrides the defaults in `p` with every option given.
-    fn apply(&self, p: &mut SegmentParams) {
-        p.max_iterations = self.max_iterations;
-        p.label_flips = !self.no_label_flips;
-        let set = |field: &mut f64, v: Option<f64>| *field = v.unwrap_or(*field);
-        set(&mut p.rigidity, self.rigidity);
-        set(&mut p.elasticity, self.elasticity);
-        set(&mut p.step_fraction, self.step_fraction);
-        set(&mut p.length_weight, self.length_weight);
-        p.flip_interval = self.flip_interval.unwrap_or(p.flip_interval);
-        if let Some(j) = self.junction_force {
-            p.junction_force = match j {
-                JunctionArg::Paper => JunctionForce::Paper,
-                JunctionArg::EdgeLocal => JunctionForce::EdgeLocal,
-            };
-        }
-    }
-}
-
-/// The number of phases, `default` when not given.
-fn phase_count(given: Option<i64>, default: usize) -> Result<usize, Error> {
-    match given {
-        None => Ok(default),
-        Some(n) if (2..=64).contains(&n) => Ok(n as usize),
-        Some(n) => Err(Error::Usage(format!(
-            "--phases {n}: the number of phases must be between 2 and 64"
-        ))),
-    }
-}
-
-/// The comma-separated numbers of a `--disk`/`--ball` value: `fixed` of
-/// them, then optionally a phase (a whole number ≥ 0; 1 when absent).
-fn parse_shape(s: &str, option: &str, fixed: usize, form: &str) -> Result<(Vec<f64>, u32), Error> {
-    let bad = || Error::Usage(format!("{option} {s:?}: expected {form}"));
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad())?;
-    let phase = match v.get(fixed) {
-        _ if v.len() < fixed || v.len() > fixed + 1 => return Err(bad()),
-        None => 1,
-        Some(&p) if p >= 0.0 && p.fract() == 0.0 => p as u32,
-        Some(_) => return Err(bad()),
-    };
-    Ok((v[..fixed].to_vec(), phase))
-}
-
-/// `--junction-force` values.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-enum JunctionArg {
-    Paper,
-    EdgeLocal,
-}
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-enum InitKind {
-    /// Cells labelled by mean: N equal intervals of the dynamic range (bisection for N = 2).
-    Range,
-    /// Disks given with --disk, everything else phase 0.
-    Disks,
-    /// A label PNG given with --init-labels.
-    Labels,
-}
-
 #[derive(Parser, Debug)]
 #[command(allow_negative_numbers = true)]
 struct SegmentArgs {
-    /// Input image (PNG, TIFF, JPEG, ...; 8/16 bit, gray or colour). Without it, a built-in phantom is segmented.
-    image: Option<PathBuf>,
+    /// Input images (PNG, TIFF, JPEG, ...; 8/16 bit, gray or colour) or
+    /// folders of them. Without any, a built-in phantom is segmented.
+    images: Vec<PathBuf>,
     /// Output directory (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Number of phases N, 2..=64 [default: 2, or the phantom's].
-    #[arg(long, allow_hyphen_values = true)]
-    phases: Option<i64>,
-    /// Average edge length L of the mesh in pixels [default: min(W,H)/64·sqrt(N-1) clamped to 3..10].
-    #[arg(long, allow_hyphen_values = true)]
-    edge_length: Option<f64>,
-    /// Initialisation.
-    #[arg(long, value_enum, default_value_t = InitKind::Range)]
-    init: InitKind,
-    /// A disk for --init disks: X,Y,R in pixels, optionally ,PHASE (default 1). Repeatable.
-    #[arg(
-        long = "disk",
-        value_name = "X,Y,R[,PHASE]",
-        allow_hyphen_values = true
-    )]
-    disks: Vec<String>,
-    /// Label PNG for --init labels (same size as the image, values 0..N-1).
-    #[arg(long)]
-    init_labels: Option<PathBuf>,
     #[command(flatten)]
-    evolution: EvolutionArgs,
+    options: SegmentOptions,
+    #[command(flatten)]
+    batch: BatchArgs,
     /// Built-in phantom to segment when no IMAGE is given.
     #[arg(long, default_value = "four_phase")]
     phantom: String,
@@ -283,41 +161,21 @@ struct PhantomArgs {
     out: PathBuf,
 }
 
-/// Every `--disk`/`--ball` value parsed; `init` needs at least one.
-fn parse_all<T>(
-    specs: &[String],
-    init: &str,
-    option: &str,
-    parse: impl Fn(&str) -> Result<T, Error>,
-) -> Result<Vec<T>, Error> {
-    if specs.is_empty() {
-        return Err(Error::Usage(format!("{init} needs at least one {option}")));
-    }
-    specs.iter().map(|s| parse(s)).collect()
-}
-
-/// `--init labels`: the labels are loaded by the pipeline from `--init-labels`.
-fn labels_init(given: bool, what: &str) -> Result<Init, Error> {
-    if !given {
-        return Err(Error::Usage(format!(
-            "--init labels needs --init-labels {what}"
-        )));
-    }
-    Ok(Init::Labels { labels: Vec::new() })
-}
-
-fn parse_disk(s: &str) -> Result<InitDisk, Error> {
-    let (v, phase) = parse_shape(s, "--disk", 3, "X,Y,R[,PHASE]")?;
-    Ok(InitDisk {
-        x: v[0],
-        y: v[1],
-        r: v[2],
-        phase,
-    })
+/// Whether `inputs` make a batch: more than one, or a folder of inputs.
+fn is_batch(inputs: &[PathBuf], three_d: bool) -> bool {
+    inputs.len() > 1 || inputs.iter().any(|p| is_batch_folder(p, three_d))
 }
 
 fn segment(a: SegmentArgs) -> Result<(), Error> {
-    let (source, default_phases) = match &a.image {
+    let outputs = Outputs::parse(&a.batch.outputs, false)?;
+    if is_batch(&a.images, false) {
+        let task = Task::Image {
+            params: a.options.params(2)?,
+            init_labels: a.options.init_labels.clone(),
+        };
+        return run_batch(&a.images, task, a.out, outputs, &a.batch, a.quiet);
+    }
+    let (source, default_phases) = match a.images.first() {
         Some(p) => (Source::File(p.clone()), 2),
         None => {
             let kind = dsc_seg::phantom::Phantom2Kind::from_name(&a.phantom)
@@ -333,24 +191,12 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
             )
         }
     };
-    let mut params = SegmentParams::new(phase_count(a.phases, default_phases)?);
-    params.edge_length = a.edge_length;
-    a.evolution.apply(&mut params);
-    params.init = match a.init {
-        InitKind::Range => Init::Range,
-        InitKind::Disks => Init::Disks(parse_all(
-            &a.disks,
-            "--init disks",
-            "--disk X,Y,R",
-            parse_disk,
-        )?),
-        InitKind::Labels => labels_init(a.init_labels.is_some(), "PNG")?,
-    };
     let job = SegmentJob {
         source,
         out: a.out,
-        params,
-        init_labels: a.init_labels,
+        params: a.options.params(default_phases)?,
+        init_labels: a.options.init_labels,
+        outputs,
         quiet: a.quiet,
     };
     let report = run_segment(&job)?;
@@ -360,17 +206,17 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
     Ok(())
 }
 
-fn parse_ball(s: &str) -> Result<InitBall, Error> {
-    let (v, phase) = parse_shape(s, "--ball", 4, "X,Y,Z,R[,PHASE]")?;
-    Ok(InitBall {
-        centre: [v[0], v[1], v[2]],
-        r: v[3],
-        phase,
-    })
-}
-
 fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
-    let source = match &a.volume {
+    let outputs = Outputs::parse(&a.batch.outputs, true)?;
+    if is_batch(&a.volumes, true) {
+        let task = Task::Volume {
+            params: a.options.params()?,
+            init_labels: a.options.init_labels.clone(),
+            init_surface: a.options.init_surface.clone(),
+        };
+        return run_batch(&a.volumes, task, a.out, outputs, &a.batch, a.quiet);
+    }
+    let source = match a.volumes.first() {
         Some(p) => Source::File(p.clone()),
         None => Source::Phantom {
             name: a.phantom.clone(),
@@ -379,25 +225,13 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
             seed: a.phantom_seed,
         },
     };
-    let mut params = SegmentParams::new_3d(phase_count(Some(a.phases), 2)?);
-    params.edge_length = a.edge_length;
-    a.evolution.apply(&mut params);
-    params.init = match a.init {
-        Init3Kind::Range => Init::Range,
-        Init3Kind::Balls => Init::Balls(parse_all(
-            &a.balls,
-            "--init balls",
-            "--ball X,Y,Z,R",
-            parse_ball,
-        )?),
-        Init3Kind::Labels => labels_init(a.init_labels.is_some(), "VOLUME")?,
-    };
     let job = Segment3dJob {
         source,
         out: a.out,
-        params,
-        init_labels: a.init_labels,
-        init_surface: a.init_surface,
+        params: a.options.params()?,
+        init_labels: a.options.init_labels,
+        init_surface: a.options.init_surface,
+        outputs,
         quiet: a.quiet,
     };
     let report = run_segment3d(&job)?;
@@ -405,6 +239,54 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
         print_summary(&report, "tets", &job.out);
     }
     Ok(())
+}
+
+/// Runs a batch; an error if any input failed (each is in the summary).
+fn run_batch(
+    paths: &[PathBuf],
+    task: Task,
+    out: PathBuf,
+    outputs: Outputs,
+    args: &BatchArgs,
+    quiet: bool,
+) -> Result<(), Error> {
+    let jobs = match args.jobs {
+        Some(0) => return Err(Error::Usage("--jobs 0: at least one job".into())),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let batch = Batch {
+        inputs: expand_inputs(paths, task_is_3d(&task))?,
+        task,
+        out,
+        outputs,
+        jobs,
+        shard: args.shard,
+        force: args.force,
+        quiet,
+    };
+    let outcome = batch.run()?;
+    let failed = outcome.count(Status::Error);
+    if !quiet {
+        eprintln!(
+            "{} done, {} skipped (complete), {failed} failed; summary in {}",
+            outcome.count(Status::Done),
+            outcome.count(Status::Skipped),
+            outcome.summary.display()
+        );
+    }
+    if failed > 0 {
+        return Err(Error::Usage(format!(
+            "{failed} of {} inputs failed (see {})",
+            outcome.rows.len(),
+            outcome.summary.display()
+        )));
+    }
+    Ok(())
+}
+
+fn task_is_3d(task: &Task) -> bool {
+    matches!(task, Task::Volume { .. })
 }
 
 /// One line on stderr: how the run ended and where the outputs are.
@@ -423,20 +305,14 @@ fn print_summary(report: &dsc_seg::segment::SegmentReport, cells: &str, out: &st
     );
 }
 
-/// A command-line parse error as one line, like every other error: clap's
-/// first paragraph (its usage and tips follow a blank line) with the lines joined.
-fn one_line(e: &clap::Error) -> String {
-    let text = e.to_string();
-    let first: Vec<&str> = text
-        .lines()
-        .take_while(|l| !l.trim().is_empty())
-        .map(str::trim)
-        .collect();
-    let msg = first.join(" ");
-    format!(
-        "{} (see --help)",
-        msg.strip_prefix("error: ").unwrap_or(&msg)
-    )
+/// On Ctrl-C or SIGTERM: remove every staging directory (waiting for an
+/// output being moved into place), then exit with 130.
+fn exit_cleanly_on_interrupt() {
+    let _ = ctrlc::set_handler(|| {
+        let _hold = dsc_seg::staging::remove_all_and_hold();
+        eprintln!("error: interrupted; unfinished outputs removed");
+        std::process::exit(130);
+    });
 }
 
 fn main() -> ExitCode {
@@ -450,10 +326,11 @@ fn main() -> ExitCode {
             e.exit()
         }
         Err(e) => {
-            eprintln!("error: {}", one_line(&e));
+            eprintln!("error: {} (see --help)", one_line(&e));
             return ExitCode::from(2);
         }
     };
+    exit_cleanly_on_interrupt();
     let result = match cli.command {
         Command::Segment(a) => segment(a),
         Command::Phantom(a) => run_phantom(&a.name, a.size, a.noise, a.seed, &a.out).map(|names| {

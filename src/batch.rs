@@ -1,0 +1,560 @@
+//! Batch runs: many inputs (files, or folders of them) into one output
+//! directory, `DIR/<stem>/` per input, with a summary table `DIR/summary.csv`.
+//!
+//! - A bad input fails its own row; the others still run.
+//! - An input whose outputs are complete and were made by the same command
+//!   (same version, parameters, outputs and input file) is skipped, unless
+//!   `force`. Completion is marked by [`MARKER`], written after the outputs.
+//! - `jobs` inputs run at once, each on one thread (its own one-thread rayon
+//!   pool, so the segmentation's parallel sections stay on it too).
+//! - A shard `I/N` takes the inputs whose position in the list is `I` modulo
+//!   `N`, for job arrays on a cluster scheduler; each shard writes its own
+//!   `summary-I-of-N.csv`.
+
+use crate::error::{Error, Result};
+use crate::io::write_bytes_atomic;
+use crate::pipeline::{load_image, segment_image_then, with_init_labels, Provenance, Source};
+use crate::pipeline3d::{load_volume, segment_volume_then, with_init_labels3};
+use crate::segment::SegmentParams;
+use crate::segmented::Outputs;
+use crate::staging::{self, Staging};
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+/// The file in `DIR/<stem>/` that says its outputs are complete, and made by what.
+pub const MARKER: &str = ".dsc-seg-complete.json";
+
+/// File extensions of the 2D images a folder is searched for.
+const IMAGE_EXTENSIONS: &[&str] = &[
+    "png", "tif", "tiff", "jpg", "jpeg", "gif", "bmp", "pnm", "pgm", "ppm", "pbm",
+];
+
+/// What each input of a batch is segmented with.
+#[derive(Clone, Debug)]
+pub enum Task {
+    /// 2D images.
+    Image {
+        /// The parameters (`Init::Labels` loaded per input from `init_labels`).
+        params: SegmentParams,
+        /// The label PNG for `Init::Labels`.
+        init_labels: Option<PathBuf>,
+    },
+    /// 3D volumes.
+    Volume {
+        /// The parameters (`Init::Labels` loaded per input from `init_labels`).
+        params: SegmentParams,
+        /// The label volume for `Init::Labels`.
+        init_labels: Option<PathBuf>,
+        /// The initial surface (see [`crate::pipeline3d::Segment3dJob::init_surface`]).
+        init_surface: Option<PathBuf>,
+    },
+}
+
+impl Task {
+    fn is_3d(&self) -> bool {
+        matches!(self, Task::Volume { .. })
+    }
+}
+
+/// A shard of a batch: inputs `index`, `index + count`, `index + 2·count`, ...
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// Which shard, `0..count`.
+    pub index: usize,
+    /// How many shards.
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+
+    /// Parses `I/N` with `0 <= I < N`.
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let bad = || format!("{s:?}: expected I/N with 0 <= I < N (e.g. 0/4)");
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let index: usize = i.trim().parse().map_err(|_| bad())?;
+        let count: usize = n.trim().parse().map_err(|_| bad())?;
+        if index >= count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+/// A batch: the inputs (already expanded) and how to run them.
+#[derive(Clone, Debug)]
+pub struct Batch {
+    /// The inputs, in order.
+    pub inputs: Vec<PathBuf>,
+    /// What each is segmented with.
+    pub task: Task,
+    /// The output directory: `DIR/<stem>/` per input and the summary.
+    pub out: PathBuf,
+    /// The files written per input.
+    pub outputs: Outputs,
+    /// Inputs run at once.
+    pub jobs: usize,
+    /// This process's part of the inputs.
+    pub shard: Option<Shard>,
+    /// Redo inputs whose outputs are complete.
+    pub force: bool,
+    /// No line per finished input on stderr.
+    pub quiet: bool,
+}
+
+/// How one input ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// Segmented and written.
+    Done,
+    /// Complete from an earlier identical run.
+    Skipped,
+    /// Failed (the row's error says why).
+    Error,
+}
+
+/// The summary table's columns, the fields of [`Row`].
+pub const COLUMNS: [&str; 8] = [
+    "name",
+    "input",
+    "phases",
+    "iterations",
+    "converged",
+    "seconds",
+    "status",
+    "error",
+];
+
+/// One row of the summary table.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Row {
+    /// The input's stem, the name of its output folder.
+    pub name: String,
+    /// The input path.
+    pub input: PathBuf,
+    /// Number of phases.
+    pub phases: Option<usize>,
+    /// Iterations run.
+    pub iterations: Option<usize>,
+    /// Whether the run converged before the iteration cap.
+    pub converged: Option<bool>,
+    /// Wall seconds of load, segmentation and writing.
+    pub seconds: Option<f64>,
+    /// How it ended.
+    pub status: Status,
+    /// The error, for a failed input.
+    pub error: String,
+}
+
+/// The rows of a finished batch, in input order, and where the summary is.
+#[derive(Debug)]
+pub struct BatchOutcome {
+    /// One row per input of this shard.
+    pub rows: Vec<Row>,
+    /// The summary table written.
+    pub summary: PathBuf,
+}
+
+impl BatchOutcome {
+    /// How many rows have `status`.
+    pub fn count(&self, status: Status) -> usize {
+        self.rows.iter().filter(|r| r.status == status).count()
+    }
+}
+
+/// Whether `path` names an input of a batch rather than a single run: a
+/// folder of images in 2D; in 3D a folder holding volume files (NIfTI,
+/// multi-page TIFF) or subfolders, rather than one volume's slices.
+pub fn is_batch_folder(path: &Path, three_d: bool) -> bool {
+    path.is_dir() && (!three_d || !volume_folder_entries(path).is_empty())
+}
+
+/// The inputs named by `paths`: files as they are, folders replaced by their
+/// inputs in name order (see [`is_batch_folder`]; hidden entries skipped).
+pub fn expand_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
+    let mut inputs = Vec::new();
+    for p in paths {
+        if !p.exists() {
+            return Err(Error::Usage(format!(
+                "input {} does not exist",
+                p.display()
+            )));
+        }
+        if !is_batch_folder(p, three_d) {
+            inputs.push(p.clone());
+        } else if three_d {
+            inputs.extend(volume_folder_entries(p));
+        } else {
+            inputs.extend(
+                sorted_entries(p)?
+                    .into_iter()
+                    .filter(|e| e.is_file() && has_extension(e, IMAGE_EXTENSIONS)),
+            );
+        }
+    }
+    Ok(inputs)
+}
+
+/// A folder's entries in name order, hidden ones left out.
+fn sorted_entries(dir: &Path) -> Result<Vec<PathBuf>> {
+    let read = std::fs::read_dir(dir)
+        .map_err(|e| Error::Usage(format!("cannot read folder {}: {e}", dir.display())))?;
+    let mut entries: Vec<PathBuf> = read
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            !p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with('.'))
+        })
+        .collect();
+    entries.sort();
+    Ok(entries)
+}
+
+fn has_extension(path: &Path, extensions: &[&str]) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| extensions.contains(&e.to_ascii_lowercase().as_str()))
+}
+
+fn is_nifti(path: &Path) -> bool {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase());
+    name.is_some_and(|n| n.ends_with(".nii") || n.ends_with(".nii.gz"))
+}
+
+/// The volumes of a folder of volumes: its NIfTI files, TIFF files and
+/// subfolders (each a folder of slices); nothing if it is one volume's
+/// slices (no NIfTI, no subfolder, every TIFF single-page).
+fn volume_folder_entries(dir: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = sorted_entries(dir) else {
+        return Vec::new();
+    };
+    let tiff = |p: &PathBuf| p.is_file() && has_extension(p, &["tif", "tiff"]);
+    let holds_volumes = entries
+        .iter()
+        .any(|p| p.is_dir() || is_nifti(p) || (tiff(p) && !is_single_page_tiff(p)));
+    if !holds_volumes {
+        return Vec::new();
+    }
+    entries
+        .into_iter()
+        .filter(|p| p.is_dir() || is_nifti(p) || tiff(p))
+        .collect()
+}
+
+/// Whether `path` is a TIFF with exactly one page (a slice, not a stack).
+fn is_single_page_tiff(path: &Path) -> bool {
+    let Ok(file) = std::fs::File::open(path) else {
+        return false;
+    };
+    match tiff::decoder::Decoder::new(std::io::BufReader::new(file)) {
+        Ok(d) => !d.more_images(),
+        Err(_) => false,
+    }
+}
+
+/// The name of an input's output folder: its file name without the
+/// extension (both of `.nii.gz`), or the folder's name.
+pub fn stem(path: &Path) -> String {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.display().to_string());
+    if path.is_dir() {
+        return name;
+    }
+    let lower = name.to_ascii_lowercase();
+    if lower.ends_with(".nii.gz") {
+        return name[..name.len() - 7].to_string();
+    }
+    match name.rfind('.') {
+        Some(i) if i > 0 => name[..i].to_string(),
+        _ => name,
+    }
+}
+
+/// What makes a run's outputs the same as an earlier one's: the version,
+/// the command, every parameter, the outputs and the input file's size and
+/// modification time.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Fingerprint {
+    version: String,
+    three_d: bool,
+    params: serde_json::Value,
+    init_labels: Option<PathBuf>,
+    init_surface: Option<PathBuf>,
+    outputs: Vec<String>,
+    input: PathBuf,
+    input_bytes: u64,
+    input_modified: Option<u128>,
+}
+
+/// The completion marker: what made the outputs and the row it gave.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Marker {
+    fingerprint: Fingerprint,
+    row: Row,
+}
+
+impl Batch {
+    /// Runs the batch: every input of this shard, `jobs` at once, then the
+    /// summary table. Fails only for problems of the whole batch (two inputs
+    /// with one stem, an unwritable output directory); each input's own
+    /// failure is in its row.
+    pub fn run(&self) -> Result<BatchOutcome> {
+        let mine: Vec<&PathBuf> = self
+            .inputs
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| self.shard.is_none_or(|s| i % s.count == s.index))
+            .map(|(_, p)| p)
+            .collect();
+        check_unique_stems(&self.inputs)?;
+        std::fs::create_dir_all(&self.out).map_err(|e| Error::OutputDir {
+            path: self.out.clone(),
+            reason: e.to_string(),
+        })?;
+        let rows = self.run_all(&mine);
+        let summary = self.out.join(match self.shard {
+            None => "summary.csv".to_string(),
+            Some(s) => format!("summary-{}-of-{}.csv", s.index, s.count),
+        });
+        let table = summary_csv(&rows)?;
+        staging::uninterrupted(|| write_bytes_atomic(&summary, &table))?;
+        Ok(BatchOutcome { rows, summary })
+    }
+
+    /// Runs `inputs` on `jobs` threads; the rows in input order.
+    fn run_all(&self, inputs: &[&PathBuf]) -> Vec<Row> {
+        let next = AtomicUsize::new(0);
+        let finished = AtomicUsize::new(0);
+        let rows: Mutex<Vec<Option<Row>>> = Mutex::new(vec![None; inputs.len()]);
+        let workers = self.jobs.clamp(1, inputs.len().max(1));
+        std::thread::scope(|scope| {
+            for _ in 0..workers {
+                scope.spawn(|| {
+                    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build();
+                    loop {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(input) = inputs.get(i) else { break };
+                        let row = match &pool {
+                            Ok(pool) => pool.install(|| self.run_guarded(input)),
+                            Err(e) => error_row(input, format!("cannot start a thread: {e}")),
+                        };
+                        let done = finished.fetch_add(1, Ordering::Relaxed) + 1;
+                        if !self.quiet {
+                            eprintln!("[{done}/{}] {}", inputs.len(), describe(&row));
+                        }
+                        rows.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(row);
+                    }
+                });
+            }
+        });
+        rows.into_inner()
+            .unwrap_or_else(|e| e.into_inner())
+            .into_iter()
+            .zip(inputs)
+            .map(|(row, input)| row.unwrap_or_else(|| error_row(input, "not run".into())))
+            .collect()
+    }
+
+    /// One input's row; a panic becomes an error row rather than ending the batch.
+    fn run_guarded(&self, input: &Path) -> Row {
+        let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.run_one(input)));
+        match run {
+            Ok(Ok(row)) => row,
+            Ok(Err(e)) => error_row(input, e.to_string().replace('\n', " ")),
+            Err(_) => error_row(input, "internal error (panic); please report it".into()),
+        }
+    }
+
+    /// Segments one input into `DIR/<stem>/`, or skips it if complete.
+    fn run_one(&self, input: &Path) -> Result<Row> {
+        let start = Instant::now();
+        let dir = self.out.join(stem(input));
+        let fingerprint = self.fingerprint(input)?;
+        if !self.force {
+            if let Some(row) = self.completed(&dir, &fingerprint) {
+                return Ok(Row {
+                    status: Status::Skipped,
+                    ..row
+                });
+            }
+        }
+        let source = Source::File(input.to_path_buf());
+        let (result, stage) = match &self.task {
+            Task::Image {
+                params,
+                init_labels,
+            } => {
+                let (image, _) = load_image(&source)?;
+                let params =
+                    with_init_labels(params.clone(), init_labels.as_deref(), image.dims())?;
+                let provenance = provenance(source, init_labels, start);
+                segment_image_then(&image, params, provenance, true, || Staging::new(&dir))?
+            }
+            Task::Volume {
+                params,
+                init_labels,
+                init_surface,
+            } => {
+                let (volume, _) = load_volume(&source)?;
+                let params =
+                    with_init_labels3(params.clone(), init_labels.as_deref(), volume.dims())?;
+                let provenance = provenance(source, init_labels, start);
+                segment_volume_then(
+                    &volume,
+                    params,
+                    provenance,
+                    init_surface.as_deref(),
+                    true,
+                    || Staging::new(&dir),
+                )?
+            }
+        };
+        result.write_staged(stage, &dir, &self.outputs)?;
+        let row = Row {
+            name: stem(input),
+            input: input.to_path_buf(),
+            phases: Some(self.params().phases),
+            iterations: Some(result.summary.iterations),
+            converged: Some(result.summary.converged),
+            seconds: Some(start.elapsed().as_secs_f64()),
+            status: Status::Done,
+            error: String::new(),
+        };
+        let marker = Marker {
+            fingerprint,
+            row: row.clone(),
+        };
+        let json = serde_json::to_vec_pretty(&marker).map_err(|e| Error::Usage(e.to_string()))?;
+        staging::uninterrupted(|| write_bytes_atomic(dir.join(MARKER), &json))?;
+        Ok(row)
+    }
+
+    fn params(&self) -> &SegmentParams {
+        match &self.task {
+            Task::Image { params, .. } | Task::Volume { params, .. } => params,
+        }
+    }
+
+    fn fingerprint(&self, input: &Path) -> Result<Fingerprint> {
+        let meta = std::fs::metadata(input)
+            .map_err(|e| Error::Usage(format!("cannot read input {}: {e}", input.display())))?;
+        let modified = meta
+            .modified()
+            .ok()
+            .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+            .map(|d| d.as_nanos());
+        let (init_labels, init_surface) = match &self.task {
+            Task::Image { init_labels, .. } => (init_labels.clone(), None),
+            Task::Volume {
+                init_labels,
+                init_surface,
+                ..
+            } => (init_labels.clone(), init_surface.clone()),
+        };
+        Ok(Fingerprint {
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            three_d: self.task.is_3d(),
+            params: serde_json::to_value(self.params()).map_err(|e| Error::Usage(e.to_string()))?,
+            init_labels,
+            init_surface,
+            outputs: self
+                .outputs
+                .files(self.task.is_3d())
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            input: input.to_path_buf(),
+            input_bytes: meta.len(),
+            input_modified: modified,
+        })
+    }
+
+    /// The row of an earlier run that made every output of this one the
+    /// same way, if `dir` holds them all.
+    fn completed(&self, dir: &Path, fingerprint: &Fingerprint) -> Option<Row> {
+        let bytes = std::fs::read(dir.join(MARKER)).ok()?;
+        let marker: Marker = serde_json::from_slice(&bytes).ok()?;
+        let all_there = fingerprint.outputs.iter().all(|f| dir.join(f).is_file());
+        (marker.fingerprint == *fingerprint && all_there).then_some(marker.row)
+    }
+}
+
+fn provenance(source: Source, init_labels: &Option<PathBuf>, start: Instant) -> Provenance {
+    Provenance {
+        source,
+        init_labels: init_labels.clone(),
+        truth: None,
+        load_seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// Two inputs with one stem would write the same folder.
+fn check_unique_stems(inputs: &[PathBuf]) -> Result<()> {
+    let mut seen: HashMap<String, &PathBuf> = HashMap::new();
+    for p in inputs {
+        if let Some(other) = seen.insert(stem(p), p) {
+            return Err(Error::Usage(format!(
+                "inputs {} and {} would both write {:?}; rename one",
+                other.display(),
+                p.display(),
+                stem(p)
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn error_row(input: &Path, error: String) -> Row {
+    Row {
+        name: stem(input),
+        input: input.to_path_buf(),
+        phases: None,
+        iterations: None,
+        converged: None,
+        seconds: None,
+        status: Status::Error,
+        error,
+    }
+}
+
+/// One line for stderr about a finished input.
+fn describe(row: &Row) -> String {
+    match row.status {
+        Status::Error => format!("{}: error: {}", row.name, row.error),
+        Status::Skipped => format!("{}: complete, skipped", row.name),
+        Status::Done => format!(
+            "{}: {} after {} iterations ({:.2} s)",
+            row.name,
+            if row.converged == Some(true) {
+                "converged"
+            } else {
+                "stopped at the iteration cap"
+            },
+            row.iterations.unwrap_or(0),
+            row.seconds.unwrap_or(0.0)
+        ),
+    }
+}
+
+/// The summary table: a header, then one row per input.
+fn summary_csv(rows: &[Row]) -> Result<Vec<u8>> {
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(Vec::new());
+    let err = |e: csv::Error| Error::Usage(format!("summary table: {e}"));
+    w.write_record(COLUMNS).map_err(err)?;
+    for row in rows {
+        w.serialize(row).map_err(err)?;
+    }
+    w.into_inner()
+        .map_err(|e| Error::Usage(format!("summary table: {e}")))
+}

@@ -1,0 +1,284 @@
+//! The segmentation options as the command line spells them, shared by the
+//! `dsc-seg` binary and the Python package.
+//!
+//! Both parse the same clap structs: the binary from its argument list, the
+//! Python package from `segment(image, **options)`'s keywords turned into
+//! `--name value` arguments. So every option, its default, its validation and
+//! its error message are the same in both, and a new option added here is a
+//! new keyword in Python without further code.
+
+use crate::error::{Error, Result};
+use crate::segment::{Init, InitBall, InitDisk, JunctionForce, SegmentParams};
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+
+/// The evolution's options, shared by `segment` and `segment3d`.
+#[derive(Args, Clone, Debug)]
+pub struct EvolutionArgs {
+    /// Iteration cap.
+    #[arg(long, default_value_t = 500)]
+    pub max_iterations: usize,
+    /// Keep every cell's label: only the interfaces move.
+    #[arg(long)]
+    pub no_label_flips: bool,
+    /// Try label flips every K iterations [default: 1 in 2D, 20 in 3D].
+    #[arg(long, value_name = "K")]
+    pub flip_interval: Option<usize>,
+    /// Rigidity weight β of eq. (2).
+    #[arg(long, allow_hyphen_values = true)]
+    pub rigidity: Option<f64>,
+    /// Elasticity weight α of eq. (2) (off by default, as in the paper).
+    #[arg(long, allow_hyphen_values = true)]
+    pub elasticity: Option<f64>,
+    /// Largest displacement per iteration as a fraction of L.
+    #[arg(long, allow_hyphen_values = true)]
+    pub step_fraction: Option<f64>,
+    /// Triple-junction force of eq. (7): `edge-local` (the default: each
+    /// sample bracketed by its own edge's phases) or `paper` (literal: the
+    /// junction's phases bracket every sample; grows wedges on blurred edges).
+    #[arg(long, value_enum)]
+    pub junction_force: Option<JunctionArg>,
+    /// Weight of the length (3D: area) term of the Mumford–Shah energy, as a
+    /// multiple of the smallest gap between phase means.
+    #[arg(long, allow_hyphen_values = true)]
+    pub length_weight: Option<f64>,
+}
+
+impl EvolutionArgs {
+    /// Overrides the defaults in `p` with every option given.
+    fn apply(&self, p: &mut SegmentParams) {
+        p.max_iterations = self.max_iterations;
+        p.label_flips = !self.no_label_flips;
+        let set = |field: &mut f64, v: Option<f64>| *field = v.unwrap_or(*field);
+        set(&mut p.rigidity, self.rigidity);
+        set(&mut p.elasticity, self.elasticity);
+        set(&mut p.step_fraction, self.step_fraction);
+        set(&mut p.length_weight, self.length_weight);
+        p.flip_interval = self.flip_interval.unwrap_or(p.flip_interval);
+        if let Some(j) = self.junction_force {
+            p.junction_force = match j {
+                JunctionArg::Paper => JunctionForce::Paper,
+                JunctionArg::EdgeLocal => JunctionForce::EdgeLocal,
+            };
+        }
+    }
+}
+
+/// `--junction-force` values.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum JunctionArg {
+    /// The junction's phases bracket every sample (the paper, literally).
+    Paper,
+    /// Each sample bracketed by its own edge's phases.
+    EdgeLocal,
+}
+
+/// `--init` values of `segment`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum InitKind {
+    /// Cells labelled by mean: N equal intervals of the dynamic range (bisection for N = 2).
+    Range,
+    /// Disks given with --disk, everything else phase 0.
+    Disks,
+    /// A label PNG given with --init-labels.
+    Labels,
+}
+
+/// `--init` values of `segment3d`.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum Init3Kind {
+    /// Cells labelled by mean: N equal intervals of the dynamic range (bisection for N = 2).
+    Range,
+    /// Balls given with --ball, everything else phase 0.
+    Balls,
+    /// A label volume given with --init-labels.
+    Labels,
+}
+
+/// The options of a 2D segmentation (everything but the input and outputs).
+#[derive(Args, Clone, Debug)]
+pub struct SegmentOptions {
+    /// Number of phases N, 2..=64 [default: 2, or the phantom's].
+    #[arg(long, allow_hyphen_values = true)]
+    pub phases: Option<i64>,
+    /// Average edge length L of the mesh in pixels [default: min(W,H)/64·sqrt(N-1) clamped to 3..10].
+    #[arg(long, allow_hyphen_values = true)]
+    pub edge_length: Option<f64>,
+    /// Initialisation.
+    #[arg(long, value_enum, default_value_t = InitKind::Range)]
+    pub init: InitKind,
+    /// A disk for --init disks: X,Y,R in pixels, optionally ,PHASE (default 1). Repeatable.
+    #[arg(
+        long = "disk",
+        value_name = "X,Y,R[,PHASE]",
+        allow_hyphen_values = true
+    )]
+    pub disks: Vec<String>,
+    /// Label PNG for --init labels (same size as the image, values 0..N-1).
+    #[arg(long)]
+    pub init_labels: Option<PathBuf>,
+    /// The evolution's options.
+    #[command(flatten)]
+    pub evolution: EvolutionArgs,
+}
+
+impl SegmentOptions {
+    /// The segmentation parameters these options give, `default_phases`
+    /// when `--phases` is absent. `--init labels` yields empty labels, which
+    /// the pipeline loads from `--init-labels` once it knows the image size.
+    pub fn params(&self, default_phases: usize) -> Result<SegmentParams> {
+        let mut params = SegmentParams::new(phase_count(self.phases, default_phases)?);
+        params.edge_length = self.edge_length;
+        self.evolution.apply(&mut params);
+        params.init = match self.init {
+            InitKind::Range => Init::Range,
+            InitKind::Disks => Init::Disks(parse_all(
+                &self.disks,
+                "--init disks",
+                "--disk X,Y,R",
+                parse_disk,
+            )?),
+            InitKind::Labels => labels_init(self.init_labels.is_some(), "PNG")?,
+        };
+        Ok(params)
+    }
+}
+
+/// The options of a 3D segmentation (everything but the input and outputs).
+#[derive(Args, Clone, Debug)]
+pub struct Segment3dOptions {
+    /// Number of phases N, 2..=64.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 2)]
+    pub phases: i64,
+    /// Average edge length L of the mesh in voxels [default: smallest side/64·sqrt(N-1) clamped to 3..10].
+    #[arg(long, allow_hyphen_values = true)]
+    pub edge_length: Option<f64>,
+    /// Initialisation.
+    #[arg(long, value_enum, default_value_t = Init3Kind::Range)]
+    pub init: Init3Kind,
+    /// A ball for --init balls: X,Y,Z,R in voxels, optionally ,PHASE (default 1). Repeatable.
+    #[arg(
+        long = "ball",
+        value_name = "X,Y,Z,R[,PHASE]",
+        allow_hyphen_values = true
+    )]
+    pub balls: Vec<String>,
+    /// Label volume for --init labels (same size as the volume, 8-bit values 0..N-1).
+    #[arg(long)]
+    pub init_labels: Option<PathBuf>,
+    /// Initial surface (closed triangle mesh: OFF, OBJ or STL, in voxel
+    /// coordinates strictly inside [0,nx]×[0,ny]×[0,nz]): the initial mesh is
+    /// tetrahedralised by TetGen to conform to it, phase 1 inside, 0 outside;
+    /// replaces --init. Needs a build with `--features tetgen` (AGPL-3 TetGen).
+    #[allow(rustdoc::broken_intra_doc_links)] // the brackets are intervals, shown as is by --help
+    #[arg(long, value_name = "FILE")]
+    pub init_surface: Option<PathBuf>,
+    /// The evolution's options.
+    #[command(flatten)]
+    pub evolution: EvolutionArgs,
+}
+
+impl Segment3dOptions {
+    /// The segmentation parameters these options give (see
+    /// [`SegmentOptions::params`] for `--init labels`).
+    pub fn params(&self) -> Result<SegmentParams> {
+        let mut params = SegmentParams::new_3d(phase_count(Some(self.phases), 2)?);
+        params.edge_length = self.edge_length;
+        self.evolution.apply(&mut params);
+        params.init = match self.init {
+            Init3Kind::Range => Init::Range,
+            Init3Kind::Balls => Init::Balls(parse_all(
+                &self.balls,
+                "--init balls",
+                "--ball X,Y,Z,R",
+                parse_ball,
+            )?),
+            Init3Kind::Labels => labels_init(self.init_labels.is_some(), "VOLUME")?,
+        };
+        Ok(params)
+    }
+}
+
+/// The number of phases, `default` when not given.
+fn phase_count(given: Option<i64>, default: usize) -> Result<usize> {
+    match given {
+        None => Ok(default),
+        Some(n) if (2..=64).contains(&n) => Ok(n as usize),
+        Some(n) => Err(Error::Usage(format!(
+            "--phases {n}: the number of phases must be between 2 and 64"
+        ))),
+    }
+}
+
+/// The comma-separated numbers of a `--disk`/`--ball` value: `fixed` of
+/// them, then optionally a phase (a whole number ≥ 0; 1 when absent).
+fn parse_shape(s: &str, option: &str, fixed: usize, form: &str) -> Result<(Vec<f64>, u32)> {
+    let bad = || Error::Usage(format!("{option} {s:?}: expected {form}"));
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| bad())?;
+    let phase = match v.get(fixed) {
+        _ if v.len() < fixed || v.len() > fixed + 1 => return Err(bad()),
+        None => 1,
+        Some(&p) if p >= 0.0 && p.fract() == 0.0 => p as u32,
+        Some(_) => return Err(bad()),
+    };
+    Ok((v[..fixed].to_vec(), phase))
+}
+
+/// Every `--disk`/`--ball` value parsed; `init` needs at least one.
+fn parse_all<T>(
+    specs: &[String],
+    init: &str,
+    option: &str,
+    parse: impl Fn(&str) -> Result<T>,
+) -> Result<Vec<T>> {
+    if specs.is_empty() {
+        return Err(Error::Usage(format!("{init} needs at least one {option}")));
+    }
+    specs.iter().map(|s| parse(s)).collect()
+}
+
+/// `--init labels`: the labels are loaded by the pipeline from `--init-labels`.
+fn labels_init(given: bool, what: &str) -> Result<Init> {
+    if !given {
+        return Err(Error::Usage(format!(
+            "--init labels needs --init-labels {what}"
+        )));
+    }
+    Ok(Init::Labels { labels: Vec::new() })
+}
+
+fn parse_disk(s: &str) -> Result<InitDisk> {
+    let (v, phase) = parse_shape(s, "--disk", 3, "X,Y,R[,PHASE]")?;
+    Ok(InitDisk {
+        x: v[0],
+        y: v[1],
+        r: v[2],
+        phase,
+    })
+}
+
+fn parse_ball(s: &str) -> Result<InitBall> {
+    let (v, phase) = parse_shape(s, "--ball", 4, "X,Y,Z,R[,PHASE]")?;
+    Ok(InitBall {
+        centre: [v[0], v[1], v[2]],
+        r: v[3],
+        phase,
+    })
+}
+
+/// A command-line parse error as one line, like every other error: clap's
+/// first paragraph (its usage and tips follow a blank line) with the lines joined.
+pub fn one_line(e: &clap::Error) -> String {
+    let text = e.to_string();
+    let first: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .map(str::trim)
+        .collect();
+    let msg = first.join(" ");
+    msg.strip_prefix("error: ").unwrap_or(&msg).to_string()
+}

@@ -1,0 +1,217 @@
+//! A finished segmentation held in memory: the label image, the final mesh
+//! as plain arrays and the report, and the writer of the command line's
+//! output files.
+//!
+//! The command line (one input or a batch) and the Python package both go
+//! through [`crate::pipeline::segment_image`] /
+//! [`crate::pipeline3d::segment_volume`] and this type, so their labels and
+//! files are the same by construction.
+
+use crate::complex::Complex3;
+use crate::error::{Error, Result};
+use crate::io::{
+    save_gray8_png, save_labels_tiff, write_bytes_atomic, write_vtu, CellArray, Cells,
+};
+use crate::io::{Image2, Overlay};
+use crate::segment::SegmentReport;
+use crate::staging::Staging;
+use std::path::Path;
+use std::time::Instant;
+
+/// A finished 2D or 3D segmentation.
+#[derive(Clone, Debug)]
+pub struct Segmented {
+    /// The input's size: `[width, height]` or `[nx, ny, nz]`.
+    pub dims: Vec<usize>,
+    /// Phase index per pixel/voxel (0..N-1 by increasing mean), x fastest:
+    /// row-major `height × width`, or `nz × ny × nx`.
+    pub labels: Vec<u8>,
+    /// Vertex positions of the final mesh, 2 (2D) or 3 (3D) per vertex, in
+    /// pixel/voxel units.
+    pub vertices: Vec<f64>,
+    /// The mesh's triangles (3 vertex indices each) or tetrahedra (4).
+    pub cells: Vec<u32>,
+    /// Each cell's phase index (as in `labels`).
+    pub cell_phases: Vec<u8>,
+    /// The run's summary (iterations, convergence, energies, timings).
+    pub summary: SegmentReport,
+    /// Everything `report.json` holds (its `times.write` is set when written).
+    pub report: serde_json::Value,
+    pub(crate) render: Render,
+}
+
+/// What the writers need beyond the arrays.
+#[derive(Clone, Debug)]
+pub(crate) enum Render {
+    /// The segmented image, under the overlay.
+    Image(Image2),
+    /// The final complex and the rank of each mesh label, for the VTK files.
+    Volume(Box<Complex3>, Vec<u8>),
+}
+
+/// The output files a run writes; `--outputs` chooses among them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Outputs {
+    /// `labels.png` (2D) or `labels.tif` (3D).
+    pub labels: bool,
+    /// `overlay.png` and `overlay.svg` (2D only).
+    pub overlay: bool,
+    /// `mesh.vtu`.
+    pub mesh: bool,
+    /// `interface.vtp` (3D only).
+    pub interface: bool,
+    /// `report.json`.
+    pub report: bool,
+}
+
+impl Default for Outputs {
+    fn default() -> Self {
+        Self::ALL
+    }
+}
+
+impl Outputs {
+    /// Every output.
+    pub const ALL: Outputs = Outputs {
+        labels: true,
+        overlay: true,
+        mesh: true,
+        interface: true,
+        report: true,
+    };
+
+    /// Parses `--outputs`: a comma-separated list of `labels`, `overlay`
+    /// (2D), `mesh`, `interface` (3D), `report`, or `all`.
+    pub fn parse(list: &str, three_d: bool) -> Result<Self> {
+        let mut o = Outputs {
+            labels: false,
+            overlay: false,
+            mesh: false,
+            interface: false,
+            report: false,
+        };
+        let names = if three_d {
+            "labels, mesh, interface, report or all"
+        } else {
+            "labels, overlay, mesh, report or all"
+        };
+        for name in list.split(',').map(str::trim) {
+            match name {
+                "labels" => o.labels = true,
+                "overlay" if !three_d => o.overlay = true,
+                "mesh" => o.mesh = true,
+                "interface" if three_d => o.interface = true,
+                "report" => o.report = true,
+                "all" => o = Self::ALL,
+                _ => {
+                    return Err(Error::Usage(format!(
+                        "--outputs {list:?}: unknown output {name:?} (each one of {names})"
+                    )))
+                }
+            }
+        }
+        Ok(o)
+    }
+
+    /// The file names these outputs are, in 2D or 3D, `report.json` last.
+    pub fn files(&self, three_d: bool) -> Vec<&'static str> {
+        let mut f = Vec::new();
+        if self.labels {
+            f.push(if three_d { "labels.tif" } else { "labels.png" });
+        }
+        if self.overlay && !three_d {
+            f.extend(["overlay.png", "overlay.svg"]);
+        }
+        if self.mesh {
+            f.push("mesh.vtu");
+        }
+        if self.interface && three_d {
+            f.push("interface.vtp");
+        }
+        if self.report {
+            f.push("report.json");
+        }
+        f
+    }
+}
+
+impl Segmented {
+    /// Whether this is a 3D segmentation.
+    pub fn is_3d(&self) -> bool {
+        self.dims.len() == 3
+    }
+
+    /// Writes `outputs` into `dir` (created if missing), all or nothing.
+    pub fn write(&self, dir: &Path, outputs: &Outputs) -> Result<()> {
+        self.write_staged(Staging::new(dir)?, dir, outputs)
+    }
+
+    /// Writes `outputs` into `stage` and publishes them into `dir`.
+    pub(crate) fn write_staged(&self, stage: Staging, dir: &Path, outputs: &Outputs) -> Result<()> {
+        let t_write = Instant::now();
+        let path = |name: &str| stage.path().join(name);
+        match &self.render {
+            Render::Image(image) => self.write_2d(image, &path, outputs)?,
+            Render::Volume(complex, order) => {
+                if outputs.labels {
+                    let d = [self.dims[0], self.dims[1], self.dims[2]];
+                    save_labels_tiff(path("labels.tif"), d, &self.labels)?;
+                }
+                if outputs.mesh {
+                    complex.write_mesh_vtu(path("mesh.vtu"), order)?;
+                }
+                if outputs.interface {
+                    complex.write_interface_vtp(path("interface.vtp"), order)?;
+                }
+            }
+        }
+        if outputs.report {
+            let mut report = self.report.clone();
+            if let Some(times) = report.get_mut("times") {
+                times["write"] = t_write.elapsed().as_secs_f64().into();
+            }
+            let json =
+                serde_json::to_vec_pretty(&report).map_err(|e| Error::Usage(e.to_string()))?;
+            write_bytes_atomic(path("report.json"), &json)?;
+        }
+        stage.publish(dir, &outputs.files(self.is_3d()))
+    }
+
+    fn write_2d(
+        &self,
+        image: &Image2,
+        path: &dyn Fn(&str) -> std::path::PathBuf,
+        outputs: &Outputs,
+    ) -> Result<()> {
+        let (w, h) = (self.dims[0], self.dims[1]);
+        if outputs.labels {
+            save_gray8_png(path("labels.png"), w, h, &self.labels)?;
+        }
+        let points: Vec<[f64; 2]> = self
+            .vertices
+            .chunks_exact(2)
+            .map(|p| [p[0], p[1]])
+            .collect();
+        let tris: Vec<[u32; 3]> = self
+            .cells
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        if outputs.overlay {
+            let phase: Vec<u32> = self.cell_phases.iter().map(|&p| p as u32).collect();
+            let overlay = Overlay::new(image, &points, &tris, &phase);
+            overlay.to_png(path("overlay.png"))?;
+            overlay.to_svg(path("overlay.svg"))?;
+        }
+        if outputs.mesh {
+            let phase: Vec<i32> = self.cell_phases.iter().map(|&p| p as i32).collect();
+            write_vtu(
+                path("mesh.vtu"),
+                &crate::io::vtk::points_2d_to_3d(&points),
+                Cells::Triangles(&tris),
+                &[("phase", CellArray::I32(&phase))],
+            )?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,301 @@
+//! Batch runs of the command line: several inputs or folders into
+//! `--out/<stem>/` with a summary table, bad inputs in their rows, complete
+//! outputs skipped, output choice, shards, and clean interruption.
+
+use crate::cli::{bin, tmp};
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+/// A noisy two-phase PNG of side `size` (a bright disk at a seed-dependent place).
+fn write_disk(dir: &Path, name: &str, size: u32, seed: u32) -> PathBuf {
+    let p = dir.join(name);
+    let c = size as f64 * (0.4 + 0.05 * (seed % 4) as f64);
+    image::GrayImage::from_fn(size, size, |x, y| {
+        let (dx, dy) = (x as f64 - c, y as f64 - c);
+        let inside = dx * dx + dy * dy < (size as f64 / 4.0).powi(2);
+        let noise = ((x * 7 + y * 13 + seed * 5) % 11) as u8 * 3;
+        image::Luma([if inside { 180 } else { 70 } + noise])
+    })
+    .save(&p)
+    .unwrap();
+    p
+}
+
+fn run(args: &[&str], inputs: &[&Path], out: &Path) -> Output {
+    bin()
+        .arg("segment")
+        .args(inputs)
+        .arg("--out")
+        .arg(out)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// The summary table's rows (header first) as fields.
+fn summary(path: &Path) -> Vec<Vec<String>> {
+    let mut r = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_path(path)
+        .unwrap();
+    r.records()
+        .map(|rec| rec.unwrap().iter().map(str::to_string).collect())
+        .collect()
+}
+
+fn row<'a>(rows: &'a [Vec<String>], name: &str) -> &'a [String] {
+    rows.iter().find(|r| r[0] == name).unwrap()
+}
+
+/// Every staging folder or temporary file (`.dsc-seg-staging-*`,
+/// `.dsc-seg-tmp-*`) under `dir`.
+fn staging_left(dir: &Path) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return found;
+    };
+    for e in entries.flatten() {
+        let p = e.path();
+        let name = p.file_name().unwrap().to_string_lossy().into_owned();
+        if name.starts_with(".dsc-seg-staging-") || name.starts_with(".dsc-seg-tmp-") {
+            found.push(p.clone());
+        }
+        if p.is_dir() {
+            found.extend(staging_left(&p));
+        }
+    }
+    found
+}
+
+const OUTPUTS_2D: [&str; 5] = [
+    "labels.png",
+    "overlay.png",
+    "overlay.svg",
+    "mesh.vtu",
+    "report.json",
+];
+
+#[test]
+fn folder_with_a_corrupt_file_runs_the_others_and_skips_them_next_time() {
+    let d = tmp();
+    let folder = d.path().join("images");
+    std::fs::create_dir(&folder).unwrap();
+    for (i, name) in ["a.png", "b.png", "c.png"].iter().enumerate() {
+        write_disk(&folder, name, 48, i as u32);
+    }
+    std::fs::write(folder.join("broken.png"), b"not a png at all").unwrap();
+    std::fs::write(folder.join("notes.txt"), b"not an image").unwrap();
+    let out = d.path().join("out");
+
+    let first = run(&["--quiet", "--jobs", "2"], &[&folder], &out);
+    let err = String::from_utf8_lossy(&first.stderr);
+    assert_eq!(first.status.code(), Some(1), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("1 of 4 inputs failed"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for stem in ["a", "b", "c"] {
+        for f in OUTPUTS_2D {
+            assert!(out.join(stem).join(f).is_file(), "{stem}/{f} missing");
+        }
+    }
+    assert!(!out.join("broken").join("labels.png").exists());
+    assert!(staging_left(&out).is_empty(), "{:?}", staging_left(&out));
+    let rows = summary(&out.join("summary.csv"));
+    assert_eq!(
+        rows[0],
+        [
+            "name",
+            "input",
+            "phases",
+            "iterations",
+            "converged",
+            "seconds",
+            "status",
+            "error"
+        ]
+    );
+    assert_eq!(rows.len(), 5);
+    let broken = row(&rows, "broken");
+    assert_eq!(broken[6], "error");
+    assert!(broken[7].contains("broken.png"), "{broken:?}");
+    for stem in ["a", "b", "c"] {
+        let r = row(&rows, stem);
+        assert_eq!((r[2].as_str(), r[6].as_str()), ("2", "done"), "{r:?}");
+        assert!(r[3].parse::<usize>().unwrap() > 0);
+    }
+
+    // The batch's labels are those of a single run of the same image.
+    let single = d.path().join("single");
+    let o = run(&["--quiet"], &[&folder.join("b.png")], &single);
+    assert!(o.status.success());
+    assert_eq!(
+        std::fs::read(single.join("labels.png")).unwrap(),
+        std::fs::read(out.join("b/labels.png")).unwrap()
+    );
+
+    // Again: the complete ones are skipped (their files untouched).
+    let stamp = |p: PathBuf| std::fs::metadata(p).unwrap().modified().unwrap();
+    let before = stamp(out.join("a/mesh.vtu"));
+    let second = run(&["--quiet"], &[&folder], &out);
+    assert_eq!(second.status.code(), Some(1));
+    let rows = summary(&out.join("summary.csv"));
+    for stem in ["a", "b", "c"] {
+        assert_eq!(row(&rows, stem)[6], "skipped");
+        assert_eq!(row(&rows, stem)[2], "2");
+    }
+    assert_eq!(row(&rows, "broken")[6], "error");
+    assert_eq!(stamp(out.join("a/mesh.vtu")), before);
+
+    // Other options or --force redo them.
+    let third = run(&["--quiet", "--max-iterations", "3"], &[&folder], &out);
+    assert_eq!(third.status.code(), Some(1));
+    let rows = summary(&out.join("summary.csv"));
+    assert_eq!(row(&rows, "a")[6], "done");
+    assert_eq!(row(&rows, "a")[3], "3");
+    let fourth = run(
+        &["--quiet", "--max-iterations", "3", "--force"],
+        &[&folder.join("a.png")],
+        &out,
+    );
+    // One file is a single run, not a batch: its outputs go into --out itself.
+    assert!(fourth.status.success());
+    assert!(out.join("labels.png").is_file());
+}
+
+#[test]
+fn outputs_shards_and_clashing_names() {
+    let d = tmp();
+    let a = write_disk(d.path(), "a.png", 40, 1);
+    let b = write_disk(d.path(), "b.png", 40, 2);
+    let out = d.path().join("out");
+    let o = run(
+        &["--quiet", "--outputs", "labels,report", "--shard", "1/2"],
+        &[&a, &b],
+        &out,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        !out.join("a").exists(),
+        "shard 1/2 takes the second input only"
+    );
+    assert!(out.join("b/labels.png").is_file());
+    assert!(out.join("b/report.json").is_file());
+    assert!(!out.join("b/mesh.vtu").exists());
+    assert!(!out.join("b/overlay.png").exists());
+    let rows = summary(&out.join("summary-1-of-2.csv"));
+    assert_eq!(rows.len(), 2);
+
+    let other = d.path().join("other");
+    std::fs::create_dir(&other).unwrap();
+    let a2 = write_disk(&other, "a.png", 40, 3);
+    let o = run(&["--quiet"], &[&a, &a2], &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(err.contains("would both write \"a\""), "{err}");
+    for bad in [
+        ["--outputs", "labels,overlay3"],
+        ["--shard", "2/2"],
+        ["--jobs", "0"],
+    ] {
+        let o = run(&bad, &[&a, &b], &d.path().join("bad"));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{bad:?}");
+        assert!(
+            err.starts_with("error: ") && err.contains(bad[1]),
+            "{bad:?}: {err}"
+        );
+        assert!(!d.path().join("bad").join("a").exists());
+    }
+}
+
+#[test]
+fn batch_of_volumes() {
+    let d = tmp();
+    let vols = d.path().join("vols");
+    let o = bin()
+        .args(["phantom3d", "two_balls", "--size", "16", "--out"])
+        .arg(&vols)
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    std::fs::write(vols.join("zz_broken.tif"), b"II*\0garbage").unwrap();
+    let out = d.path().join("out");
+    let o = bin()
+        .args([
+            "segment3d",
+            "--quiet",
+            "--max-iterations",
+            "4",
+            "--outputs",
+            "labels",
+        ])
+        .arg(&vols)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let rows = summary(&out.join("summary.csv"));
+    assert_eq!(rows.len(), 4, "{rows:?}");
+    assert_eq!(row(&rows, "two_balls")[6], "done");
+    assert_eq!(row(&rows, "two_balls_labels")[6], "done");
+    assert_eq!(row(&rows, "zz_broken")[6], "error");
+    assert!(out.join("two_balls/labels.tif").is_file());
+    assert!(!out.join("two_balls/mesh.vtu").exists());
+}
+
+/// Ctrl-C in the middle of a batch and of a single run removes every
+/// staging folder and leaves no half-written output.
+#[cfg(unix)]
+#[test]
+fn interrupted_runs_leave_no_staging_folders() {
+    let d = tmp();
+    let folder = d.path().join("images");
+    std::fs::create_dir(&folder).unwrap();
+    for i in 0..8 {
+        write_disk(&folder, &format!("i{i}.png"), 160, i);
+    }
+    for batch in [true, false] {
+        let out = d.path().join(format!("out_{batch}"));
+        let mut cmd = bin();
+        cmd.arg("segment").arg("--quiet").arg("--out").arg(&out);
+        if batch {
+            cmd.arg(&folder).args(["--jobs", "2"]);
+        } else {
+            cmd.args(["--phantom-size", "512", "--max-iterations", "100000"]);
+        }
+        let mut child = cmd.spawn().unwrap();
+        let started = std::time::Instant::now();
+        while staging_left(&out).is_empty() {
+            assert!(started.elapsed().as_secs() < 60, "no staging folder seen");
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        let kill = std::process::Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+        let status = child.wait().unwrap();
+        let left = staging_left(&out);
+        assert!(left.is_empty(), "batch {batch}: left {left:?}");
+        if status.code() == Some(130) {
+            // Every output folder is complete or holds no output at all.
+            for e in std::fs::read_dir(&out).unwrap().flatten() {
+                if e.path().is_dir() {
+                    let n = OUTPUTS_2D
+                        .iter()
+                        .filter(|f| e.path().join(f).exists())
+                        .count();
+                    assert!(
+                        n == 0 || n == OUTPUTS_2D.len(),
+                        "{:?}: {n} outputs",
+                        e.path()
+                    );
+                }
+            }
+        } else {
+            // The run finished before the signal arrived.
+            assert!(status.success(), "{status:?}");
+        }
+    }
+}
