@@ -1,7 +1,7 @@
 //! Per-phase measures and connected components.
 
-use super::{CellId, Complex, Label};
-use crate::dim::Dim;
+use super::{CellId, Complex, Label, VertexId};
+use crate::dim::{Dim, Point};
 
 impl<K: Dim> Complex<K> {
     /// Total area (2D) or volume (3D) of each phase, indexed by label.
@@ -47,5 +47,35 @@ impl<K: Dim> Complex<K> {
     /// Number of live cells with the given label.
     pub fn cells_with_label(&self, label: Label) -> usize {
         self.cell_ids().filter(|&c| self.label(c) == label).count()
+    }
+
+    /// Smallest, median and largest edge length (each edge once); zeros
+    /// for a complex without cells.
+    pub fn edge_length_summary(&self) -> [f64; 3] {
+        let mut edges: Vec<(VertexId, VertexId)> = Vec::with_capacity(3 * self.cell_count());
+        for c in self.cell_ids() {
+            let cell = self.cell(c);
+            for i in 0..K::NV {
+                for j in i + 1..K::NV {
+                    let (u, v) = (cell[i], cell[j]);
+                    edges.push(if u < v { (u, v) } else { (v, u) });
+                }
+            }
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        let mut lengths: Vec<f64> = edges
+            .iter()
+            .map(|&(u, v)| (self.position(u) - self.position(v)).length())
+            .collect();
+        if lengths.is_empty() {
+            return [0.0; 3];
+        }
+        let mid = lengths.len() / 2;
+        let median = *lengths.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let (lo, hi) = lengths
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &l| (a.min(l), b.max(l)));
+        [lo, median, hi]
     }
 }

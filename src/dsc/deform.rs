@@ -2,7 +2,7 @@
 
 use super::improve::ImproveStats;
 use super::resize::ResizeStats;
-use super::{Connectivity, DscParams, DscWorkspace};
+use super::{Connectivity, DscParams, DscWorkspace, SizingField};
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::Dim;
 use crate::dim::Point;
@@ -120,14 +120,15 @@ impl<K: Connectivity> Complex<K> {
                     MoveOutcome::Partial(_) | MoveOutcome::Blocked => true,
                 }
             });
-            report.snapped += self.snap_to_border(&mut pending, destinations, params, &mut star);
+            report.snapped +=
+                self.snap_to_border(&mut pending, destinations, params, &ws.sizing, &mut star);
             add(
                 &mut report.improve,
                 self.improve_near_with(&movers, params, ws),
             );
         }
         report.stopped_short = requested - report.arrived - report.snapped;
-        report.resize = self.resize_with(params, &mut touched, &mut ws.edges);
+        report.resize = self.resize_with(params, &ws.sizing, &mut touched, &mut ws.edges);
         touched.retain(|&v| self.is_vertex_alive(v));
         add(
             &mut report.improve,
@@ -144,7 +145,7 @@ impl<K: Connectivity> Complex<K> {
     /// A vertex heading for a box face is blocked by the thin cells between it
     /// and the face: it may only go half-way to them, so it would approach the
     /// border forever (the paper's Fig. 5 artifact). Once it is closer than
-    /// `min_length·L` to the face, merge it with the nearest interior vertex on
+    /// `min_length·h` to the face, merge it with the nearest interior vertex on
     /// that face (an unsafe collapse placed on the face), so the interface
     /// reaches the border and then slides along it. Returns how many snapped.
     fn snap_to_border(
@@ -152,9 +153,9 @@ impl<K: Connectivity> Complex<K> {
         pending: &mut Vec<VertexId>,
         destinations: &Destinations<K>,
         params: &DscParams,
+        sizing: &SizingField,
         star: &mut Vec<CellId>,
     ) -> usize {
-        let reach = params.min_length * params.edge_length;
         let (lo, hi) = self.domain();
         let mut snapped = 0;
         pending.retain(|&v| {
@@ -168,6 +169,7 @@ impl<K: Connectivity> Complex<K> {
                     .expect("pending vertices have destinations"),
             );
             let p = self.position(v);
+            let reach = params.min_length * sizing.at(&p, params.edge_length);
             let here = self.class(v).boundary;
             let mut face = None;
             for axis in 0..K::N {

@@ -1,7 +1,7 @@
 //! Mesh improvement between moves: smoothing, flips, removal of degenerate cells.
 
 use super::workspace::{RegionBuffers, WalkScratch};
-use super::{DscParams, DscWorkspace};
+use super::{DscParams, DscWorkspace, SizingField};
 use crate::complex::{CellId, Complex, Rejection, VertexId};
 use crate::dim::{Dim, D2, D3};
 use crate::ops::{edge_settled, CollapseMode, ImproveMemo, SmoothScratch};
@@ -256,7 +256,7 @@ impl<K: Connectivity> Complex<K> {
         ws: &mut DscWorkspace<K>,
     ) -> (usize, usize, usize) {
         let region_cells = region.cells(self);
-        if !self.degenerate_near(region_cells, params, &mut ws.memo, &mut ws.walk) {
+        if !self.degenerate_near(region_cells, params, &ws.sizing, &mut ws.memo, &mut ws.walk) {
             return (0, 0, 0);
         }
         let cells = &mut ws.grown;
@@ -269,7 +269,7 @@ impl<K: Connectivity> Complex<K> {
             marks[c.index()] = true;
         }
         self.grow_region(cells, marks, &mut ws.walk);
-        self.remove_degenerate_with(cells, params, &mut ws.walk)
+        self.remove_degenerate_with(cells, params, &ws.sizing, &mut ws.walk)
     }
 
     /// The live cells around `seeds` (the union of their stars, each cell
@@ -312,6 +312,7 @@ impl<K: Connectivity> Complex<K> {
         &self,
         cells: &[CellId],
         params: &DscParams,
+        sizing: &SizingField,
         memo: &mut ImproveMemo,
         walk: &mut WalkScratch,
     ) -> bool {
@@ -321,7 +322,11 @@ impl<K: Connectivity> Complex<K> {
                 continue;
             }
             self.star_into(v, &mut walk.star);
-            if walk.star.iter().any(|&c| self.is_degenerate(c, params)) {
+            if walk
+                .star
+                .iter()
+                .any(|&c| self.is_degenerate_sized(c, params, sizing))
+            {
                 return true;
             }
             memo.set_sound(self, v);
@@ -382,12 +387,19 @@ impl<K: Connectivity> Complex<K> {
 
     /// Whether a cell is degenerate by quality, measure or edge length.
     pub fn is_degenerate(&self, c: CellId, params: &DscParams) -> bool {
+        self.is_degenerate_sized(c, params, &SizingField::uniform())
+    }
+
+    /// [`is_degenerate`](Self::is_degenerate) with the measure and length
+    /// thresholds taken at the target size `h` of the cell's centroid.
+    pub fn is_degenerate_sized(&self, c: CellId, params: &DscParams, sizing: &SizingField) -> bool {
         // (the exact comparison, without the square root of the quality;
         // every test on one read of the corners)
         let pts = self.cell_points(c);
         let pts = &pts[..K::NV];
+        let h = sizing.at_cell(pts, params.edge_length);
         if !K::quality_at_least(pts, params.degenerate_quality)
-            || K::signed_measure(pts) < params.measure::<K>(params.degenerate_measure)
+            || K::signed_measure(pts) < params.degenerate_measure * K::regular_measure(h)
         {
             return true;
         }
@@ -397,7 +409,7 @@ impl<K: Connectivity> Complex<K> {
                 shortest = shortest.min(crate::dim::Point::length(&(pts[i] - pts[j])));
             }
         }
-        shortest < params.degenerate_length * params.edge_length
+        shortest < params.degenerate_length * h
     }
 
     /// Removes degenerate cells by collapsing their edges, shortest first: a
@@ -416,7 +428,12 @@ impl<K: Connectivity> Complex<K> {
         cells: &[CellId],
         params: &DscParams,
     ) -> (usize, usize, usize) {
-        self.remove_degenerate_with(cells, params, &mut WalkScratch::default())
+        self.remove_degenerate_with(
+            cells,
+            params,
+            &SizingField::uniform(),
+            &mut WalkScratch::default(),
+        )
     }
 
     /// [`remove_degenerate_in`](Self::remove_degenerate_in) with reused scratch space.
@@ -424,6 +441,7 @@ impl<K: Connectivity> Complex<K> {
         &mut self,
         cells: &[CellId],
         params: &DscParams,
+        sizing: &SizingField,
         walk: &mut WalkScratch,
     ) -> (usize, usize, usize) {
         let straight_cos = params.straight_angle_deg.to_radians().cos();
@@ -440,7 +458,7 @@ impl<K: Connectivity> Complex<K> {
                 break;
             }
             budget -= 1;
-            if !self.is_alive(c) || !self.is_degenerate(c, params) {
+            if !self.is_alive(c) || !self.is_degenerate_sized(c, params, sizing) {
                 continue;
             }
             let touched = match self.collapse_cell(c, params, straight_cos, star) {
@@ -451,11 +469,12 @@ impl<K: Connectivity> Complex<K> {
                     }
                     kept
                 }
-                // 3D: no collapse removes it; split its longest edge if longer than L.
+                // 3D: no collapse removes it; split its longest edge if longer than h.
                 None if K::N == 3 => {
                     let (u, v) = self.longest_edge(c);
-                    let long = crate::dim::Point::length(&(self.position(u) - self.position(v)))
-                        > params.edge_length;
+                    let h = sizing.at_cell(&self.cell_points(c)[..K::NV], params.edge_length);
+                    let long =
+                        crate::dim::Point::length(&(self.position(u) - self.position(v))) > h;
                     if !long {
                         continue;
                     }
@@ -563,7 +582,13 @@ mod tests {
             mesh.grow_region(&mut grown, &mut marks, &mut WalkScratch::default());
             let fresh = grown.iter().any(|&c| mesh.is_degenerate(c, &params));
             assert_eq!(
-                mesh.degenerate_near(&cells, &params, &mut memo, &mut WalkScratch::default()),
+                mesh.degenerate_near(
+                    &cells,
+                    &params,
+                    &SizingField::uniform(),
+                    &mut memo,
+                    &mut WalkScratch::default()
+                ),
                 fresh,
                 "round {round}"
             );

@@ -8,9 +8,11 @@ mod deform;
 mod improve;
 mod params;
 mod resize;
+mod sizing;
 mod workspace;
 
 pub use deform::{DeformReport, Destinations};
 pub use improve::{Connectivity, Region};
 pub use params::{DscParams, ParamError};
+pub use sizing::SizingField;
 pub use workspace::DscWorkspace;

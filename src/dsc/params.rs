@@ -38,6 +38,10 @@ pub struct DscParams {
     pub min_length: f64,
     /// Edges shorter than this times `L` are degenerate.
     pub degenerate_length: f64,
+    /// With a graded sizing field, interior edges shorter than this times the
+    /// target size `h` are collapsed (coarsening towards `h`).
+    #[serde(default = "default_coarsen_length")]
+    pub coarsen_length: f64,
     /// Cells larger than this times `A(L)` get their longest edge split.
     pub max_measure: f64,
     /// Cells smaller than this times `A(L)` are collapsed when safe.
@@ -51,6 +55,12 @@ pub struct DscParams {
     pub straight_angle_deg: f64,
     /// Most move-and-improve rounds per deform call.
     pub max_rounds: usize,
+}
+
+/// An equilateral cell of edge `0.6·h` still has `0.36·A(h)`, above the
+/// small-cell threshold, so a coarsened cell is not collapsed again at once.
+fn default_coarsen_length() -> f64 {
+    0.6
 }
 
 impl DscParams {
@@ -74,6 +84,7 @@ impl DscParams {
             max_length: 2.0,
             min_length: 0.5,
             degenerate_length: 0.1,
+            coarsen_length: default_coarsen_length(),
             max_measure: 5.0,
             min_measure: 0.2,
             degenerate_measure: 0.04,
@@ -123,6 +134,12 @@ impl DscParams {
             self.min_length,
             self.min_length > self.degenerate_length,
             "must exceed degenerate_length",
+        )?;
+        check(
+            "coarsen_length",
+            self.coarsen_length,
+            self.coarsen_length >= 0.0 && 2.0 * self.coarsen_length < self.max_length,
+            "must lie in [0, max_length / 2), or coarsening undoes splits",
         )?;
         check(
             "degenerate_length",

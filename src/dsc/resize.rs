@@ -1,6 +1,6 @@
 //! Resizing after a deform: keep interface edges and cells near the target size.
 
-use super::DscParams;
+use super::{DscParams, SizingField};
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::Point;
 use crate::ops::CollapseMode;
@@ -19,31 +19,52 @@ pub struct ResizeStats {
     pub cell_splits: usize,
     /// Small cells collapsed.
     pub cell_collapses: usize,
+    /// Interior edges collapsed for being short against a graded sizing
+    /// field (coarsening; never with the uniform field).
+    pub interior_collapses: usize,
 }
+
+/// With a graded sizing field, the passes of large-cell splits one resize
+/// may run (each halves a cell about; the uniform field runs one).
+const REFINE_PASSES: usize = 3;
 
 impl<K: Connectivity> Complex<K> {
     /// Splits long and collapses short interface edges, splits large and
-    /// collapses small cells. The vertices it creates or moves are appended to
+    /// collapses small cells, against the average edge length `L` of
+    /// `params` everywhere. The vertices it creates or moves are appended to
     /// `touched`, so that the caller can improve the mesh around them.
     pub fn resize(&mut self, params: &DscParams, touched: &mut Vec<VertexId>) -> ResizeStats {
-        self.resize_with(params, touched, &mut Vec::new())
+        self.resize_sized(params, &SizingField::uniform(), touched)
     }
 
-    /// [`resize`](Self::resize) listing the interface edges into `edges` (scratch).
+    /// [`resize`](Self::resize) against the target size `h` of `sizing`,
+    /// read at each edge's midpoint and each cell's centroid. A graded field
+    /// also coarsens: interior edges (no end on an interface) shorter than
+    /// `coarsen_length·h` are collapsed where the collapse is safe.
+    pub fn resize_sized(
+        &mut self,
+        params: &DscParams,
+        sizing: &SizingField,
+        touched: &mut Vec<VertexId>,
+    ) -> ResizeStats {
+        self.resize_with(params, sizing, touched, &mut Vec::new())
+    }
+
+    /// [`resize_sized`](Self::resize_sized) listing the interface edges into `edges` (scratch).
     pub(super) fn resize_with(
         &mut self,
         params: &DscParams,
+        sizing: &SizingField,
         touched: &mut Vec<VertexId>,
         edges: &mut Vec<(VertexId, VertexId)>,
     ) -> ResizeStats {
         let mut stats = ResizeStats::default();
-        let l = params.edge_length;
         let straight_cos = params.straight_angle_deg.to_radians().cos();
         self.interface_edges_into(edges);
         for &(u, v) in edges.iter() {
             if self
-                .edge_length_if_alive(u, v)
-                .is_some_and(|len| len > params.max_length * l)
+                .edge_against_size(u, v, params, sizing)
+                .is_some_and(|(len, h)| len > params.max_length * h)
             {
                 if let Ok(m) = self.split_edge(u, v) {
                     touched.push(m);
@@ -58,8 +79,8 @@ impl<K: Connectivity> Complex<K> {
         }
         for &(u, v) in edges.iter() {
             if self
-                .edge_length_if_alive(u, v)
-                .is_some_and(|len| len < params.min_length * l)
+                .edge_against_size(u, v, params, sizing)
+                .is_some_and(|(len, h)| len < params.min_length * h)
                 && self
                     .collapse_edge(u, v, CollapseMode::Safe, params.min_quality, straight_cos)
                     .is_ok()
@@ -67,8 +88,40 @@ impl<K: Connectivity> Complex<K> {
                 stats.interface_collapses += 1;
             }
         }
-        let max_measure = params.measure::<K>(params.max_measure);
-        let min_measure = params.measure::<K>(params.min_measure);
+        let passes = if sizing.is_uniform() {
+            1
+        } else {
+            REFINE_PASSES
+        };
+        for pass in 0..passes {
+            let splits = stats.cell_splits;
+            self.resize_cells(params, sizing, pass == 0, touched, &mut stats);
+            if stats.cell_splits == splits {
+                break;
+            }
+        }
+        if !sizing.is_uniform() {
+            stats.interior_collapses = self.coarsen_interior(params, sizing, touched);
+        }
+        stats
+    }
+
+    /// One pass over the cells: those larger than `max_measure·A(h)` are
+    /// split at their longest edge; with `collapse_small`, those smaller
+    /// than `min_measure·A(h)` are collapsed at their shortest edge.
+    fn resize_cells(
+        &mut self,
+        params: &DscParams,
+        sizing: &SizingField,
+        collapse_small: bool,
+        touched: &mut Vec<VertexId>,
+        stats: &mut ResizeStats,
+    ) {
+        let straight_cos = params.straight_angle_deg.to_radians().cos();
+        let uniform_bounds = (
+            params.measure::<K>(params.max_measure),
+            params.measure::<K>(params.min_measure),
+        );
         let end = self.cell_capacity();
         for c in 0..end {
             let c = CellId(c as u32);
@@ -76,13 +129,20 @@ impl<K: Connectivity> Complex<K> {
                 continue;
             }
             let m = self.measure(c);
+            let (max_measure, min_measure) = if sizing.is_uniform() {
+                uniform_bounds
+            } else {
+                let h = sizing.at_cell(&self.cell_points(c)[..K::NV], params.edge_length);
+                let a = K::regular_measure(h);
+                (params.max_measure * a, params.min_measure * a)
+            };
             if m > max_measure {
                 let (u, v) = self.longest_edge(c);
                 if let Ok(m) = self.split_edge(u, v) {
                     touched.push(m);
                     stats.cell_splits += 1;
                 }
-            } else if m < min_measure {
+            } else if collapse_small && m < min_measure {
                 let (u, v) = self.shortest_edge(c);
                 if let Ok(k) =
                     self.collapse_edge(u, v, CollapseMode::Safe, params.min_quality, straight_cos)
@@ -92,7 +152,39 @@ impl<K: Connectivity> Complex<K> {
                 }
             }
         }
-        stats
+    }
+
+    /// Collapses, safely, the shortest edge of each cell without an
+    /// interface vertex whose length is below `coarsen_length·h`; returns
+    /// how many collapsed.
+    fn coarsen_interior(
+        &mut self,
+        params: &DscParams,
+        sizing: &SizingField,
+        touched: &mut Vec<VertexId>,
+    ) -> usize {
+        let straight_cos = params.straight_angle_deg.to_radians().cos();
+        let mut collapses = 0;
+        let end = self.cell_capacity();
+        for c in 0..end {
+            let c = CellId(c as u32);
+            if !self.is_alive(c) || self.cell(c).iter().any(|&v| self.class(v).on_interface()) {
+                continue;
+            }
+            let (u, v) = self.shortest_edge(c);
+            let Some((len, h)) = self.edge_against_size(u, v, params, sizing) else {
+                continue;
+            };
+            if len < params.coarsen_length * h {
+                if let Ok(k) =
+                    self.collapse_edge(u, v, CollapseMode::Safe, params.min_quality, straight_cos)
+                {
+                    touched.push(k);
+                    collapses += 1;
+                }
+            }
+        }
+        collapses
     }
 
     /// Every edge lying in an interface facet, each once.
@@ -128,8 +220,19 @@ impl<K: Connectivity> Complex<K> {
         edges.dedup();
     }
 
-    fn edge_length_if_alive(&self, u: VertexId, v: VertexId) -> Option<f64> {
-        (self.is_vertex_alive(u) && self.is_vertex_alive(v))
-            .then(|| (self.position(u) - self.position(v)).length())
+    /// The length of the edge `uv` and the target size at its midpoint,
+    /// if both ends are alive.
+    fn edge_against_size(
+        &self,
+        u: VertexId,
+        v: VertexId,
+        params: &DscParams,
+        sizing: &SizingField,
+    ) -> Option<(f64, f64)> {
+        if !(self.is_vertex_alive(u) && self.is_vertex_alive(v)) {
+            return None;
+        }
+        let (a, b) = (self.position(u), self.position(v));
+        Some(((a - b).length(), sizing.at_edge(a, b, params.edge_length)))
     }
 }

@@ -6,6 +6,7 @@
 //! iteration's deform allocates nothing of its own (the local mesh
 //! operations' few small buffers aside).
 
+use super::SizingField;
 use crate::complex::{CellId, VertexId};
 use crate::dim::Dim;
 use crate::ops::{ImproveMemo, SmoothScratch};
@@ -35,6 +36,9 @@ pub struct DscWorkspace<K: Dim> {
     pub(super) grown_marks: Vec<bool>,
     pub(super) walk: WalkScratch,
     pub(super) smooth: SmoothScratch<K>,
+    /// The target edge length over the domain, read by resizing and the
+    /// degenerate-cell thresholds (uniform unless set).
+    pub(super) sizing: SizingField,
 }
 
 impl<K: Dim> DscWorkspace<K> {
@@ -52,7 +56,22 @@ impl<K: Dim> DscWorkspace<K> {
             grown_marks: Vec::new(),
             walk: WalkScratch::default(),
             smooth: SmoothScratch::default(),
+            sizing: SizingField::uniform(),
         }
+    }
+}
+
+impl<K: Dim> DscWorkspace<K> {
+    /// The sizing field the next deform and improvement read.
+    pub fn sizing(&self) -> &SizingField {
+        &self.sizing
+    }
+
+    /// Sets the sizing field; the memo's verdicts (about the old
+    /// thresholds) are forgotten.
+    pub fn set_sizing(&mut self, sizing: SizingField) {
+        self.sizing = sizing;
+        self.memo.forget();
     }
 }
 

@@ -13,3 +13,4 @@ mod generic;
 mod prop2d;
 mod seg3d;
 mod segment2d;
+mod sizing;
