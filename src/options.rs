@@ -42,6 +42,18 @@ pub struct EvolutionArgs {
     /// multiple of the smallest gap between phase means.
     #[arg(long, allow_hyphen_values = true)]
     pub length_weight: Option<f64>,
+    /// Adaptive resolution: a graded mesh, L at the interfaces, finer where
+    /// the data is not explained (down to --min-edge-length), coarser away
+    /// from interfaces (up to --max-edge-length); starts from a coarse mesh.
+    #[arg(long)]
+    pub adaptive: bool,
+    /// Smallest target edge length of the adaptive mesh [default: 1.5]; implies --adaptive.
+    #[arg(long, allow_hyphen_values = true)]
+    pub min_edge_length: Option<f64>,
+    /// Largest target edge length of the adaptive mesh [default: smallest
+    /// side/16, at least L]; implies --adaptive.
+    #[arg(long, allow_hyphen_values = true)]
+    pub max_edge_length: Option<f64>,
 }
 
 impl EvolutionArgs {
@@ -55,6 +67,10 @@ impl EvolutionArgs {
         set(&mut p.step_fraction, self.step_fraction);
         set(&mut p.length_weight, self.length_weight);
         p.flip_interval = self.flip_interval.unwrap_or(p.flip_interval);
+        p.sizing.adaptive |=
+            self.adaptive || self.min_edge_length.is_some() || self.max_edge_length.is_some();
+        p.sizing.min_edge_length = self.min_edge_length.or(p.sizing.min_edge_length);
+        p.sizing.max_edge_length = self.max_edge_length.or(p.sizing.max_edge_length);
         if let Some(j) = self.junction_force {
             p.junction_force = match j {
                 JunctionArg::Paper => JunctionForce::Paper,

@@ -1,5 +1,6 @@
 //! The iteration driver: integrate, flip, compute forces, deform, check convergence.
 
+use super::adaptive::{AdaptiveSizing, Sizes};
 use super::error::SegmentError;
 use super::force_stage::{ForceInputs, ForceStage};
 use super::forces::ForceField;
@@ -44,6 +45,13 @@ pub struct IterationRecord {
     pub means: Vec<Option<f64>>,
     /// Triple junctions with an external force, and crossings without.
     pub junctions: (usize, usize),
+    /// Cells of the mesh after the iteration.
+    #[serde(default)]
+    pub cells: usize,
+    /// Smallest, median and largest edge length after the iteration
+    /// (adaptive runs only; the uniform mesh keeps its edges near `L`).
+    #[serde(default)]
+    pub edge_lengths: Option<[f64; 3]>,
 }
 
 /// Why the run stopped.
@@ -154,6 +162,8 @@ pub struct SegmentReport {
     pub vertices: usize,
     /// Cells of the final mesh.
     pub cells: usize,
+    /// The sizes of adaptive resolution (`None`: the uniform mesh at `L`).
+    pub sizes: Option<Sizes>,
 }
 
 /// A segmentation in progress: the complex, the image, the models of the
@@ -184,6 +194,8 @@ pub struct Segmentation<'a, K: Raster> {
     /// The deform's memo and buffers, kept so that an iteration's deform
     /// does not allocate.
     deform_workspace: DscWorkspace<K>,
+    /// The sizing field of adaptive resolution (`None`: uniform at `L`).
+    adaptive: Option<AdaptiveSizing>,
     /// Whether the label rules can predict their changes
     /// ([`LabelRule::would_relabel`](super::model::LabelRule::would_relabel)) so that
     /// they are checked beside the forces.
@@ -267,10 +279,16 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let l = params.resolved_edge_length(image.dims);
         let dsc = DscParams::new::<K>(l);
         let given = preset.is_some();
+        let sizes = (params.sizing.adaptive).then(|| params.sizing.sizes(&image.dims[..K::N], l));
+        // Adaptive runs start coarse: the first iterations refine.
         let mut complex = match preset {
             Some(c) => c,
-            None => K::box_complex(&image, l)?,
+            None => K::box_complex(&image, sizes.map_or(l, |s| s.h_max))?,
         };
+        let adaptive = sizes.map(|sizes| {
+            let (lo, hi) = complex.domain();
+            AdaptiveSizing::new::<K>(&params.sizing, sizes, lo, hi)
+        });
         let mut cells = Vec::new();
         // Through the cache: the initialisation relabels cells but rarely
         // moves them, so the first step finds them integrated already.
@@ -318,6 +336,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             models,
             force,
             deform_workspace: DscWorkspace::new(),
+            adaptive,
             predict_flips: true,
             nu: 0.0,
             range,
@@ -480,7 +499,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let l = self.dsc.edge_length;
 
         let t = Instant::now();
-        if !self.force.dest.is_empty() {
+        self.update_sizing();
+        if !self.force.dest.is_empty() || self.adaptive.is_some() {
             self.complex
                 .deform_with(&self.force.dest, &self.dsc, &mut self.deform_workspace);
         }
@@ -495,6 +515,11 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             max_displacement: max_disp / l,
             means: self.phases.mean.clone(),
             junctions: self.force.field.junctions,
+            cells: self.complex.cell_count(),
+            edge_lengths: self
+                .adaptive
+                .as_ref()
+                .map(|_| self.complex.edge_length_summary()),
         };
         // Under noise a fixed step never lets every vertex settle: once the
         // energy has not reached a new low for `STALL_ITERATIONS`, halve the
@@ -671,6 +696,16 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             times: self.times,
             vertices: self.complex.vertex_count(),
             cells: self.complex.cell_count(),
+            sizes: self.adaptive.as_ref().map(AdaptiveSizing::sizes),
+        }
+    }
+
+    /// Adaptive runs: the sizing field for the next deform, from the
+    /// current interfaces and statistics.
+    fn update_sizing(&mut self) {
+        if let Some(adaptive) = &mut self.adaptive {
+            let field = adaptive.update(&self.complex, &self.cells, &self.phases);
+            self.deform_workspace.set_sizing(field.clone());
         }
     }
 

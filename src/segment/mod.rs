@@ -17,11 +17,14 @@
 //! - [`models`]: the paper's terms and rules written against them, and
 //!   examples from the deformable-model literature (balloon, edge attraction,
 //!   volcano);
+//! - [`adaptive`]: the sizing field of adaptive resolution (refinement
+//!   where the data is not explained, coarsening where nothing happens);
 //! - [`driver`]: the session loop, the Mumford–Shah energy and the stopping rule;
 //! - [`params`] and [`error`];
 //! - `tetgen_init` (feature `tetgen`): initial 3D complexes conforming to a
 //!   closed surface, built with TetGen.
 
+pub mod adaptive;
 pub mod driver;
 pub mod error;
 pub mod flips;

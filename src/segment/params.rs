@@ -1,5 +1,6 @@
 //! The segmentation's parameters, with documented defaults.
 
+use super::adaptive::SizingParams;
 use super::error::SegmentError;
 use serde::{Deserialize, Serialize};
 
@@ -173,6 +174,9 @@ pub struct SegmentParams {
     pub length_weight: f64,
     /// Spacing of the samples along interface facets, in pixels.
     pub sample_spacing: f64,
+    /// Adaptive resolution (off: the paper's uniform mesh at `L`).
+    #[serde(default)]
+    pub sizing: SizingParams,
 }
 
 impl SegmentParams {
@@ -196,6 +200,7 @@ impl SegmentParams {
             converge_iterations: 5,
             length_weight: if phases == 2 { 0.3 } else { 0.4 },
             sample_spacing: 1.0,
+            sizing: SizingParams::default(),
         }
     }
 
@@ -278,6 +283,7 @@ impl SegmentParams {
                 Err(SegmentError::Param(name, v, range))
             }
         };
+        self.sizing.validate()?;
         let non_negative = "must be a finite number ≥ 0";
         check(
             "rigidity",

@@ -1,0 +1,297 @@
+//! Adaptive resolution: the sizing field the segmentation gives the DSC each
+//! iteration, fine where the data has detail, coarse where it is flat.
+//!
+//! The field starts at the coarsest size `h_max` everywhere and is lowered
+//!
+//! - to the interface size `L` (the average edge length of the uniform
+//!   mesh) at every cell touching an interface, so interfaces keep the
+//!   resolution of the paper's mesh;
+//! - towards `h_min` wherever the data is not explained: a cell away from
+//!   every interface whose pixels deviate from its phase's mean clearly more
+//!   than the noise does (its excess residual above the estimated noise is
+//!   both statistically significant and worth at least one smallest cell of
+//!   mislabelled pixels). Such a cell asks for a third of its size at its centroid;
+//!   these requests are remembered for the whole run (they mark structure,
+//!   which does not go away), so a thin line or a small blob ends up in cells
+//!   small enough for the label flips to give it its own phase;
+//!
+//! then limited in gradation. Everything else coarsens towards `h_max`
+//! (interior collapses in `resize`), so cells far from every interface in
+//! homogeneous regions are few. The run starts from a mesh at `h_max`
+//! (coarse to fine): the initialisation labels coarse cells, and the first
+//! iterations refine around the interfaces and the unexplained detail.
+
+use super::integrate::{CellStats, PhaseStats};
+use super::SegmentError;
+use crate::complex::{CellId, Complex};
+use crate::dim::{Dim, Point};
+use crate::dsc::SizingField;
+use serde::{Deserialize, Serialize};
+
+/// The adaptive-resolution options of a run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SizingParams {
+    /// Whether the mesh is adaptive (`false`: the paper's uniform mesh at `L`).
+    pub adaptive: bool,
+    /// Smallest target edge length `h_min` in pixels (`None`: 1.5).
+    pub min_edge_length: Option<f64>,
+    /// Largest target edge length `h_max` in pixels (`None`: the smallest
+    /// image extent / 16, at least `L`).
+    pub max_edge_length: Option<f64>,
+    /// Gradation `g`: `h(a) ≤ h(b) + g·|a − b|`, so neighbouring cells of
+    /// size about `h` differ by at most a factor of about `1 + g`.
+    pub gradation: f64,
+    /// A cell's excess residual must exceed this many standard deviations
+    /// of the noise's residual to ask for refinement.
+    pub residual_sigmas: f64,
+}
+
+impl Default for SizingParams {
+    fn default() -> Self {
+        SizingParams {
+            adaptive: false,
+            min_edge_length: None,
+            max_edge_length: None,
+            gradation: 0.5,
+            residual_sigmas: 5.0,
+        }
+    }
+}
+
+/// An unexplained cell asks for this fraction of its longest edge: below
+/// `1/√5`, so that resizing (which splits cells above 5 times the regular
+/// measure of `h`) splits it.
+const REFINE_FACTOR: f64 = 0.3;
+
+/// The smallest target edge length when none is given.
+pub const DEFAULT_MIN_EDGE_LENGTH: f64 = 1.5;
+
+/// The resolved sizes of a run.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Sizes {
+    /// Smallest target edge length.
+    pub h_min: f64,
+    /// Target edge length at interfaces (`L`).
+    pub interface: f64,
+    /// Largest target edge length (also the initial mesh's).
+    pub h_max: f64,
+}
+
+impl SizingParams {
+    /// The sizes for an image of `dims` samples (the first `n` count) and
+    /// interface edge length `l`: `h_min ≤ L ≤ h_max`.
+    pub fn sizes(&self, dims: &[usize], l: f64) -> Sizes {
+        let extent = dims.iter().copied().min().unwrap_or(1) as f64;
+        let h_max = self.max_edge_length.unwrap_or(extent / 16.0).max(l);
+        let h_min = self
+            .min_edge_length
+            .unwrap_or(DEFAULT_MIN_EDGE_LENGTH)
+            .min(l);
+        Sizes {
+            h_min,
+            interface: l,
+            h_max: h_max.min(extent),
+        }
+    }
+
+    /// Checks the values.
+    pub fn validate(&self) -> Result<(), SegmentError> {
+        let check = |name: &'static str, v: f64, ok: bool, range: &'static str| {
+            if ok && v.is_finite() {
+                Ok(())
+            } else {
+                Err(SegmentError::Param(name, v, range))
+            }
+        };
+        let positive = "must be a positive number";
+        if let Some(v) = self.min_edge_length {
+            check("min_edge_length", v, v > 0.0, positive)?;
+        }
+        if let Some(v) = self.max_edge_length {
+            check("max_edge_length", v, v > 0.0, positive)?;
+        }
+        if let (Some(a), Some(b)) = (self.min_edge_length, self.max_edge_length) {
+            check(
+                "min_edge_length",
+                a,
+                a <= b,
+                "must not exceed max_edge_length",
+            )?;
+        }
+        check("gradation", self.gradation, self.gradation > 0.0, positive)?;
+        check(
+            "residual_sigmas",
+            self.residual_sigmas,
+            self.residual_sigmas > 0.0,
+            positive,
+        )
+    }
+}
+
+/// What the adaptive sizing keeps across iterations.
+#[derive(Clone, Debug)]
+pub struct AdaptiveSizing {
+    sizes: Sizes,
+    gradation: f64,
+    residual_sigmas: f64,
+    /// The refinement requests so far (lowered only), on the field's grid.
+    requests: SizingField,
+    /// The field of the last update.
+    field: SizingField,
+    /// Cells that asked for refinement in the last update.
+    pub last_requests: usize,
+    /// The estimated noise variance of the last update.
+    pub noise_variance: f64,
+}
+
+impl AdaptiveSizing {
+    /// The sizing of a run on the domain `[lo, hi]` of a `K` complex.
+    pub fn new<K: Dim>(params: &SizingParams, sizes: Sizes, lo: K::Point, hi: K::Point) -> Self {
+        let (lo, hi) = (coords::<K>(lo), coords::<K>(hi));
+        // Fine enough to place the interface size; each sample is a min.
+        let spacing = sizes.h_min.max(0.5 * sizes.interface);
+        let requests = SizingField::constant(&lo, &hi, K::N, spacing, sizes.h_max);
+        AdaptiveSizing {
+            sizes,
+            gradation: params.gradation,
+            residual_sigmas: params.residual_sigmas,
+            field: requests.clone(),
+            requests,
+            last_requests: 0,
+            noise_variance: 0.0,
+        }
+    }
+
+    /// The resolved sizes.
+    pub fn sizes(&self) -> Sizes {
+        self.sizes
+    }
+
+    /// The field for the next deform of `complex`, whose cells have the
+    /// statistics `cells` (indexed by cell id) and the phases `phases`.
+    pub fn update<K: Dim>(
+        &mut self,
+        complex: &Complex<K>,
+        cells: &[CellStats],
+        phases: &PhaseStats,
+    ) -> &SizingField {
+        self.noise_variance = noise_variance(complex, cells);
+        let gap = smallest_gap(phases);
+        let smallest_cell = K::regular_measure(self.sizes.h_min).max(1.0);
+        let mut field = self.field.clone();
+        field.fill(self.sizes.h_max);
+        self.last_requests = 0;
+        for c in complex.cell_ids() {
+            let pts = complex.cell_points(c);
+            let pts = &pts[..K::NV];
+            let centroid = centroid(pts);
+            if complex
+                .cell(c)
+                .iter()
+                .any(|&v| complex.class(v).on_interface())
+            {
+                field.lower(&centroid, self.sizes.interface);
+                continue;
+            }
+            let Some(stats) = cells.get(c.index()) else {
+                continue;
+            };
+            if self.unexplained(complex, c, stats, phases, gap, smallest_cell) {
+                let longest = longest_edge(pts);
+                let target = (REFINE_FACTOR * longest).max(self.sizes.h_min);
+                self.requests.lower(&centroid, target);
+                self.last_requests += 1;
+            }
+        }
+        field.lower_to(&self.requests);
+        field.limit_gradation(self.gradation);
+        self.field = field;
+        &self.field
+    }
+
+    /// Whether the pixels of `c` deviate from its phase's mean clearly more
+    /// than noise of the estimated variance would.
+    fn unexplained<K: Dim>(
+        &self,
+        complex: &Complex<K>,
+        c: CellId,
+        stats: &CellStats,
+        phases: &PhaseStats,
+        gap: f64,
+        smallest_cell: f64,
+    ) -> bool {
+        let n = stats.count as f64;
+        if stats.count < 4 {
+            return false;
+        }
+        let Some(mean) = phases
+            .mean
+            .get(complex.label(c) as usize)
+            .copied()
+            .flatten()
+        else {
+            return false;
+        };
+        let var = self.noise_variance;
+        let excess = stats.sse(mean) - n * var;
+        // The sum of n squared Gaussian residuals has standard deviation
+        // σ²·√(2n); a mislabelled smallest cell costs gap²·its pixels.
+        excess > self.residual_sigmas * var * (2.0 * n).sqrt() && excess > gap * gap * smallest_cell
+    }
+}
+
+/// The noise variance, estimated as the median over cells of their pixels'
+/// variance about the cell's own mean (robust: most cells are homogeneous).
+fn noise_variance<K: Dim>(complex: &Complex<K>, cells: &[CellStats]) -> f64 {
+    let mut v: Vec<f64> = complex
+        .cell_ids()
+        .filter_map(|c| cells.get(c.index()))
+        .filter(|s| s.count >= 4)
+        .map(|s| {
+            let n = s.count as f64;
+            let m = s.sum / n;
+            ((s.sum_sq - n * m * m) / (n - 1.0)).max(0.0)
+        })
+        .collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    let mid = v.len() / 2;
+    *v.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// The smallest gap between two known phase means (0 with fewer than two).
+fn smallest_gap(phases: &PhaseStats) -> f64 {
+    let mut m: Vec<f64> = phases.mean.iter().flatten().copied().collect();
+    m.sort_by(f64::total_cmp);
+    m.windows(2)
+        .map(|w| w[1] - w[0])
+        .fold(f64::INFINITY, f64::min)
+        .min(if m.len() < 2 { 0.0 } else { f64::INFINITY })
+}
+
+fn coords<K: Dim>(p: K::Point) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    for (a, o) in out.iter_mut().enumerate().take(K::N) {
+        *o = p[a];
+    }
+    out
+}
+
+fn centroid<P: Point>(pts: &[P]) -> P {
+    let mut c = P::zero();
+    for &p in pts {
+        c += p;
+    }
+    c * (1.0 / pts.len() as f64)
+}
+
+fn longest_edge<P: Point>(pts: &[P]) -> f64 {
+    let mut longest: f64 = 0.0;
+    for i in 0..pts.len() {
+        for j in i + 1..pts.len() {
+            longest = longest.max((pts[i] - pts[j]).length());
+        }
+    }
+    longest
+}
