@@ -141,6 +141,7 @@ pub mod dim;
 pub mod dsc;
 pub mod error;
 pub mod figures;
+pub mod ids;
 pub mod io;
 pub mod ops;
 pub mod options;

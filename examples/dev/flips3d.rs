@@ -6,7 +6,7 @@
 //! `cargo run --release --example flips3d -- [two_balls|torus|hollow_sphere] [size] [sigma] [max_iterations]`
 //! (environment `FLIP_INTERVAL=k` and `FLIP_ONCE=0|1` override the 3D defaults).
 
-use dsc_seg::complex::{CellId, Label};
+use dsc_seg::complex::Label;
 use dsc_seg::dim::D3;
 use dsc_seg::phantom::Phantom3Kind;
 use dsc_seg::pipeline::mean_dice;
@@ -33,29 +33,21 @@ impl LabelRule<D3> for Watch {
     }
 
     fn relabel(&mut self, ctx: &mut LabelContext<'_, '_, D3>) -> usize {
-        let before: Vec<Label> = (0..ctx.complex.cell_capacity() as u32)
-            .map(|i| {
-                let c = CellId(i);
-                if ctx.complex.is_alive(c) {
-                    ctx.complex.label(c)
-                } else {
-                    Label::MAX
-                }
-            })
-            .collect();
+        // labels before the rule (Label::MAX for dead slots)
+        let mut before = vec![Label::MAX; ctx.complex.cell_capacity()];
+        for c in ctx.complex.cell_ids() {
+            before[c.index()] = ctx.complex.label(c);
+        }
         // interface cells before the rule
-        let on_interface: Vec<bool> = (0..before.len() as u32)
-            .map(|i| {
-                let c = CellId(i);
-                ctx.complex.is_alive(c)
-                    && ctx
-                        .complex
-                        .neighbours(c)
-                        .iter()
-                        .flatten()
-                        .any(|nb| before[nb.index()] != before[i as usize])
-            })
-            .collect();
+        let mut on_interface = vec![false; before.len()];
+        for c in ctx.complex.cell_ids() {
+            on_interface[c.index()] = ctx
+                .complex
+                .neighbours(c)
+                .iter()
+                .flatten()
+                .any(|nb| before[nb.index()] != before[c.index()]);
+        }
         let n = self.inner.relabel(ctx);
         if n == 0 {
             return 0;
@@ -66,9 +58,10 @@ impl LabelRule<D3> for Watch {
         let (mut iface, mut toward, mut away, mut mixed) = (0, 0, 0, 0);
         let mut refl = 0;
         let mut vox = Vec::new();
-        for (i, &b) in before.iter().enumerate() {
-            let c = CellId(i as u32);
-            if !ctx.complex.is_alive(c) || ctx.complex.label(c) == b {
+        for c in ctx.complex.cell_ids() {
+            let i = c.index();
+            let b = before.get(i).copied().unwrap_or(Label::MAX);
+            if b == Label::MAX || ctx.complex.label(c) == b {
                 continue;
             }
             let st = ctx.cells[i];

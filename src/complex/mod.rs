@@ -9,17 +9,16 @@ mod build;
 mod cavity;
 mod class;
 mod export;
-mod ids;
 mod interface;
 mod junction;
 mod measure;
 mod validate;
 
+pub use crate::ids::{CellId, Label, VertexId};
 pub use build::BuildError;
 pub use cavity::Rejection;
 pub use class::{VertexClass, VertexKind};
 pub use export::MeshArrays;
-pub use ids::{CellId, Label, VertexId};
 pub use interface::InterfaceFacet;
 pub use validate::Finding;
 

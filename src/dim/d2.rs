@@ -1,5 +1,5 @@
 use super::Dim;
-use crate::complex::{CellId, VertexId};
+use crate::ids::{CellId, VertexId};
 use nalgebra::Vector2;
 
 /// Two dimensions: triangles over an image.

@@ -1,5 +1,5 @@
 use super::Dim;
-use crate::complex::{CellId, VertexId};
+use crate::ids::{CellId, VertexId};
 use nalgebra::Vector3;
 
 /// Three dimensions: tetrahedra over a volume.

@@ -14,7 +14,7 @@ pub use d2::D2;
 pub use d3::D3;
 pub use point::Point;
 
-use crate::complex::{CellId, VertexId};
+use crate::ids::{CellId, VertexId};
 use std::fmt::Debug;
 
 mod sealed {
