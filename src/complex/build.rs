@@ -1,6 +1,7 @@
 //! Construction: from arrays, regular box meshes at an edge length, and (2D)
 //! meshes conforming to user polygons.
 
+use super::bookkeeping::Bookkeeping;
 use super::cavity::{facet_key, FacetKey};
 use super::{CellId, Complex, Label, VertexClass, VertexId, VertexKind};
 use crate::dim::{Dim, Point, D2, D3};
@@ -122,14 +123,7 @@ impl<K: Dim> Complex<K> {
             live_vertices,
             domain_min: min,
             domain_max: max,
-            compactions: 0,
-            last_cell_map: Vec::new(),
-            last_vertex_map: Vec::new(),
-            moved_at: vec![0; n_points],
-            star_changed_at: vec![0; n_points],
-            move_clock: 0,
-            spare_lists: Vec::new(),
-            relabels: 0,
+            book: Bookkeeping::new(n_points),
         };
         complex.reclassify_all();
         Ok(complex)
@@ -150,7 +144,7 @@ impl<K: Dim> Complex<K> {
     /// Relabels every cell with `f(cell centroid)` (used by initialisations).
     pub fn label_by(&mut self, mut f: impl FnMut(K::Point) -> Label) {
         let ids: Vec<CellId> = self.cell_ids().collect();
-        self.relabels += 1;
+        self.book.relabels += 1;
         for c in ids {
             let p = self.cell_points(c);
             let mut centroid = K::Point::zero();

@@ -93,9 +93,9 @@ impl<K: Dim> Complex<K> {
     pub(crate) fn add_vertex(&mut self, p: K::Point) -> VertexId {
         let id = VertexId(self.positions.len() as u32);
         self.positions.push(p);
-        self.move_clock += 1;
-        self.moved_at.push(self.move_clock);
-        self.star_changed_at.push(self.move_clock);
+        self.book.move_clock += 1;
+        self.book.moved_at.push(self.book.move_clock);
+        self.book.star_changed_at.push(self.book.move_clock);
         self.vertex_cell.push(None);
         self.classes.push(super::VertexClass {
             kind: super::VertexKind::Interior,
@@ -211,7 +211,7 @@ impl<K: Dim> Complex<K> {
             return Err(Rejection::NonManifold);
         }
         // Commit.
-        self.move_clock += 1;
+        self.book.move_clock += 1;
         for &c in old {
             self.alive[c.index()] = false;
             self.mark_star_changed(c);

@@ -5,6 +5,7 @@
 //! stores one incident cell. Facets and edges stay implicit. This module knows
 //! nothing of images or forces.
 
+mod bookkeeping;
 mod build;
 mod cavity;
 mod class;
@@ -23,6 +24,7 @@ pub use interface::InterfaceFacet;
 pub use validate::Finding;
 
 use crate::dim::{Dim, Point, D2, D3};
+use bookkeeping::Bookkeeping;
 
 /// A labelled simplicial complex filling an axis-aligned box (the image domain).
 #[derive(Clone, Debug)]
@@ -39,24 +41,10 @@ pub struct Complex<K: Dim> {
     live_vertices: usize,
     domain_min: K::Point,
     domain_max: K::Point,
-    /// How many times [`Complex::compact`] renumbered the complex.
-    compactions: u64,
-    /// The old-to-new cell map of the last compaction.
-    last_cell_map: Vec<Option<CellId>>,
-    /// The old-to-new vertex map of the last compaction.
-    last_vertex_map: Vec<Option<VertexId>>,
-    /// Per vertex: the value of `move_clock` when it was created or last moved.
-    moved_at: Vec<u64>,
-    /// Per vertex: the value of `move_clock` when its star last changed (a
-    /// corner of it moved, a cell of it was created or removed).
-    star_changed_at: Vec<u64>,
-    /// Counts vertex moves and creations and cell replacements.
-    move_clock: u64,
-    /// Cleared lists that operations borrow ([`Complex::take_list`]), so
-    /// that a move, collapse or split allocates nothing once they have grown.
-    spare_lists: Vec<Vec<CellId>>,
-    /// Counts the calls that changed labels.
-    relabels: u64,
+    /// Clocks, counters, the last compaction's maps and spare lists: what
+    /// the complex records for the caches of other layers and lends to
+    /// operations, apart from the mesh itself.
+    book: Bookkeeping,
 }
 
 /// A triangle complex.
@@ -290,7 +278,7 @@ impl<K: Dim> Complex<K> {
     /// Sets the label of one cell and reclassifies its vertices.
     pub fn set_label(&mut self, c: CellId, label: Label) {
         if self.labels[c.index()] != label {
-            self.relabels += 1;
+            self.book.relabels += 1;
             self.labels[c.index()] = label;
             self.reclassify_cells(&[c]);
         }
@@ -298,7 +286,7 @@ impl<K: Dim> Complex<K> {
 
     /// Sets many labels at once (one reclassification pass).
     pub fn set_labels(&mut self, changes: &[(CellId, Label)]) {
-        self.relabels += 1;
+        self.book.relabels += 1;
         for &(c, l) in changes {
             self.labels[c.index()] = l;
         }
@@ -310,8 +298,8 @@ impl<K: Dim> Complex<K> {
     /// ([`Complex::move_towards`](crate::ops) does).
     pub(crate) fn set_position(&mut self, v: VertexId, p: K::Point) {
         self.positions[v.index()] = p;
-        self.move_clock += 1;
-        self.moved_at[v.index()] = self.move_clock;
+        self.book.move_clock += 1;
+        self.book.moved_at[v.index()] = self.book.move_clock;
         // Every vertex sharing a cell with `v` has a changed star.
         let mut star = self.take_list();
         self.star_into(v, &mut star);
@@ -324,22 +312,22 @@ impl<K: Dim> Complex<K> {
     /// An empty list of cells from the spares (a new one if none is left);
     /// [`give_back`](Self::give_back) returns it.
     pub(crate) fn take_list(&mut self) -> Vec<CellId> {
-        self.spare_lists.pop().unwrap_or_default()
+        self.book.spare_lists.pop().unwrap_or_default()
     }
 
     /// Returns a list taken by [`take_list`](Self::take_list) to the spares.
     pub(crate) fn give_back(&mut self, mut list: Vec<CellId>) {
         list.clear();
-        self.spare_lists.push(list);
+        self.book.spare_lists.push(list);
     }
 
     /// Records that the stars of `c`'s corners changed now.
     #[inline]
     pub(crate) fn mark_star_changed(&mut self, c: CellId) {
-        let clock = self.move_clock;
+        let clock = self.book.move_clock;
         for k in 0..K::NV {
             let w = self.cells[c.index()].as_ref()[k];
-            self.star_changed_at[w.index()] = clock;
+            self.book.star_changed_at[w.index()] = clock;
         }
     }
 
@@ -349,14 +337,14 @@ impl<K: Dim> Complex<K> {
     /// most `t`, and one computed from a vertex's star for the vertices
     /// whose [`star_changed_at`](Self::star_changed_at) is.
     pub fn move_clock(&self) -> u64 {
-        self.move_clock
+        self.book.move_clock
     }
 
     /// A counter of the calls that changed labels ([`set_label`](Self::set_label),
     /// [`set_labels`](Self::set_labels), [`label_by`](Self::label_by)): a
     /// result that depends on labels holds while it is unchanged.
     pub fn relabels(&self) -> u64 {
-        self.relabels
+        self.book.relabels
     }
 
     /// The [`move_clock`](Self::move_clock) when the star of `v` last
@@ -364,13 +352,13 @@ impl<K: Dim> Complex<K> {
     /// around `v` was created or removed.
     #[inline]
     pub fn star_changed_at(&self, v: VertexId) -> u64 {
-        self.star_changed_at[v.index()]
+        self.book.star_changed_at[v.index()]
     }
 
     /// The [`move_clock`](Self::move_clock) when `v` was created or last moved.
     #[inline]
     pub fn moved_at(&self, v: VertexId) -> u64 {
-        self.moved_at[v.index()]
+        self.book.moved_at[v.index()]
     }
 
     /// The largest label in use plus one.
@@ -385,7 +373,10 @@ impl<K: Dim> Complex<K> {
     /// the old-to-new vertex and cell maps. Invalidates every id held outside.
     pub fn compact(&mut self) -> (Vec<Option<VertexId>>, Vec<Option<CellId>>) {
         self.compact_in_place();
-        (self.last_vertex_map.clone(), self.last_cell_map.clone())
+        (
+            self.book.last_vertex_map.clone(),
+            self.book.last_cell_map.clone(),
+        )
     }
 
     /// [`Complex::compact`] without allocating: the arrays are compacted in
@@ -393,8 +384,8 @@ impl<K: Dim> Complex<K> {
     /// numbers them) and the maps are kept in [`Complex::last_cell_map`] and
     /// [`Complex::last_vertex_map`]. The deform loop calls this every iteration.
     pub fn compact_in_place(&mut self) {
-        let mut vmap = std::mem::take(&mut self.last_vertex_map);
-        let mut cmap = std::mem::take(&mut self.last_cell_map);
+        let mut vmap = std::mem::take(&mut self.book.last_vertex_map);
+        let mut cmap = std::mem::take(&mut self.book.last_cell_map);
         vmap.clear();
         vmap.resize(self.positions.len(), None);
         let mut n = 0u32;
@@ -418,15 +409,15 @@ impl<K: Dim> Complex<K> {
             if let Some(new) = *new {
                 let k = new.index();
                 self.positions[k] = self.positions[i];
-                self.moved_at[k] = self.moved_at[i];
-                self.star_changed_at[k] = self.star_changed_at[i];
+                self.book.moved_at[k] = self.book.moved_at[i];
+                self.book.star_changed_at[k] = self.book.star_changed_at[i];
                 self.classes[k] = self.classes[i];
                 self.vertex_cell[k] = self.vertex_cell[i].and_then(|c| cmap[c.index()]);
             }
         }
         self.positions.truncate(n as usize);
-        self.moved_at.truncate(n as usize);
-        self.star_changed_at.truncate(n as usize);
+        self.book.moved_at.truncate(n as usize);
+        self.book.star_changed_at.truncate(n as usize);
         self.classes.truncate(n as usize);
         self.vertex_cell.truncate(n as usize);
         for (i, new) in cmap.iter().enumerate() {
@@ -450,27 +441,27 @@ impl<K: Dim> Complex<K> {
         self.labels.truncate(m as usize);
         self.alive.clear();
         self.alive.resize(m as usize, true);
-        self.last_vertex_map = vmap;
-        self.last_cell_map = cmap;
-        self.compactions += 1;
+        self.book.last_vertex_map = vmap;
+        self.book.last_cell_map = cmap;
+        self.book.compactions += 1;
     }
 
     /// The old-to-new vertex map of the last [`Complex::compact`] (empty
     /// before the first).
     pub fn last_vertex_map(&self) -> &[Option<VertexId>] {
-        &self.last_vertex_map
+        &self.book.last_vertex_map
     }
 
     /// How many times [`Complex::compact`] has renumbered this complex (lets
     /// per-cell caches follow the renumbering, see [`Complex::last_cell_map`]).
     pub fn compactions(&self) -> u64 {
-        self.compactions
+        self.book.compactions
     }
 
     /// The old-to-new cell map of the last [`Complex::compact`] (empty before
     /// the first).
     pub fn last_cell_map(&self) -> &[Option<CellId>] {
-        &self.last_cell_map
+        &self.book.last_cell_map
     }
 }
 
