@@ -8,7 +8,10 @@
 
 use crate::dim::D2;
 use crate::error::{Error, Result};
-use crate::io::{save_gray8_png, Image2, Overlay};
+use crate::io::intensity::IntensityMap;
+use crate::io::resolution::image_frame;
+use crate::io::{save_gray8_png, Frame, Image2, Overlay};
+use crate::segment::measurements::Measurements;
 use crate::phantom::{self, Phantom2Kind};
 use crate::segment::{ImageView, Init, Raster, SegmentParams, SegmentReport, Segmentation};
 use crate::segmented::{Outputs, Render, Segmented};
@@ -428,7 +431,20 @@ pub(crate) fn segment_image_then<T>(
         width: w,
         height: h,
     };
-    let report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
+    let mut report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
+    let frame = match &provenance.source {
+        Source::File(path) => image_frame(path, w, h),
+        _ => Frame::image_rows_up(w, h, [1.0, 1.0], "px"),
+    };
+    let intensity = match &provenance.source {
+        Source::File(path) => IntensityMap::of_image_file(path),
+        _ => None,
+    };
+    let order = seg.phase_order();
+    let measurements =
+        Measurements::from_labels(&labels, image.data(), intensity, &frame, params.phases)
+            .with_mesh_2d(seg.complex(), &order, &frame);
+    add_frame_and_phases(&mut report_json, &frame, &measurements)?;
     let result = Segmented {
         dims: vec![w, h],
         labels,
@@ -437,9 +453,23 @@ pub(crate) fn segment_image_then<T>(
         cell_phases: phase.iter().map(|&p| p as u8).collect(),
         summary: report,
         report: report_json,
-        render: Render::Image(image.clone()),
+        frame,
+        measurements,
+        render: Render::Image(image.clone(), Box::new(seg.complex().clone()), order),
     };
     Ok((result, ready))
+}
+
+/// Adds the input's frame and the measurements to a report.
+pub(crate) fn add_frame_and_phases(
+    report: &mut serde_json::Value,
+    frame: &Frame,
+    measurements: &Measurements,
+) -> Result<()> {
+    let value = |v: serde_json::Result<serde_json::Value>| v.map_err(|e| Error::Usage(e.to_string()));
+    report["frame"] = value(serde_json::to_value(frame))?;
+    report["phases"] = value(serde_json::to_value(measurements))?;
+    Ok(())
 }
 
 /// Writes phantom `name` (`NAME.png`, ground truth `NAME_gt.png` with phase

@@ -10,9 +10,10 @@ use crate::io::{save_labels_tiff, Volume};
 use crate::phantom::noise::to_u8;
 use crate::phantom::Phantom3Kind;
 use crate::pipeline::{
-    check_phantom, mean_dice, run_with_progress, GroundTruth, JobTimes, Provenance, RunReport,
-    Source,
+    add_frame_and_phases, check_phantom, mean_dice, run_with_progress, GroundTruth, JobTimes,
+    Provenance, RunReport, Source,
 };
+use crate::segment::measurements::Measurements;
 use crate::segment::{ImageView, Init, SegmentParams, SegmentReport, Segmentation};
 use crate::segmented::{Outputs, Render, Segmented};
 use crate::staging::Staging;
@@ -253,7 +254,17 @@ pub(crate) fn segment_volume_then<T>(
         junction_edges: complex.junction_edges().len(),
         quality: quality(complex),
     };
-    let report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
+    let mut report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
+    let frame = volume.frame();
+    let measurements = Measurements::from_labels(
+        &labels,
+        volume.data(),
+        volume.intensity(),
+        &frame,
+        params.phases,
+    )
+    .with_mesh_3d(complex, &order, &frame);
+    add_frame_and_phases(&mut report_json, &frame, &measurements)?;
     let arrays = complex.to_arrays();
     let cell_phases = arrays
         .labels
@@ -268,7 +279,13 @@ pub(crate) fn segment_volume_then<T>(
         cell_phases,
         summary: report,
         report: report_json,
-        render: Render::Volume(Box::new(complex.clone()), order),
+        frame,
+        measurements,
+        render: Render::Volume(
+            Some(volume.data().to_vec()),
+            Box::new(complex.clone()),
+            order,
+        ),
     };
     Ok((result, ready))
 }
@@ -322,8 +339,8 @@ pub fn run_phantom3d(
     let names = vec![format!("{base}.tif"), format!("{base}_labels.tif")];
     let image: Vec<u8> = ph.image.iter().map(|&v| to_u8(v as f64)).collect();
     let dims = [ph.nx, ph.ny, ph.nz];
-    save_labels_tiff(stage.path().join(&names[0]), dims, &image)?;
-    save_labels_tiff(stage.path().join(&names[1]), dims, &ph.truth)?;
+    save_labels_tiff(stage.path().join(&names[0]), dims, &image, None)?;
+    save_labels_tiff(stage.path().join(&names[1]), dims, &ph.truth, None)?;
     let refs: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
     stage.publish(out, &refs)?;
     Ok(names)

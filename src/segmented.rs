@@ -7,12 +7,12 @@
 //! [`crate::pipeline3d::segment_volume`] and this type, so their labels and
 //! files are the same by construction.
 
-use crate::complex::Complex3;
+use crate::complex::{Complex2, Complex3};
 use crate::error::{Error, Result};
-use crate::io::{
-    save_gray8_png, save_labels_tiff, write_bytes_atomic, write_vtu, CellArray, Cells,
-};
-use crate::io::{Image2, Overlay};
+use crate::io::resolution::Resolution;
+use crate::io::{save_gray8_png, save_labels_tiff, write_bytes_atomic, write_vti, write_vtm};
+use crate::io::{Frame, Image2, Overlay};
+use crate::segment::measurements::Measurements;
 use crate::segment::SegmentReport;
 use crate::staging::Staging;
 use std::path::Path;
@@ -37,16 +37,22 @@ pub struct Segmented {
     pub summary: SegmentReport,
     /// Everything `report.json` holds (its `times.write` is set when written).
     pub report: serde_json::Value,
+    /// Where the input's pixels/voxels sit in the world (the VTK files' frame).
+    pub frame: Frame,
+    /// Per-phase and per-interface figures in physical units.
+    pub measurements: Measurements,
     pub(crate) render: Render,
 }
 
 /// What the writers need beyond the arrays.
 #[derive(Clone, Debug)]
 pub(crate) enum Render {
-    /// The segmented image, under the overlay.
-    Image(Image2),
-    /// The final complex and the rank of each mesh label, for the VTK files.
-    Volume(Box<Complex3>, Vec<u8>),
+    /// The segmented image (under the overlay, in `image.vti`), the final
+    /// complex and the rank of each mesh label, for the VTK files.
+    Image(Image2, Box<Complex2>, Vec<u8>),
+    /// The volume's values for `image.vti` (when written), the final
+    /// complex and the rank of each mesh label.
+    Volume(Option<Vec<f32>>, Box<Complex3>, Vec<u8>),
 }
 
 /// The output files a run writes; `--outputs` chooses among them.
@@ -58,8 +64,12 @@ pub struct Outputs {
     pub overlay: bool,
     /// `mesh.vtu`.
     pub mesh: bool,
-    /// `interface.vtp` (3D only).
+    /// `interface.vtp`.
     pub interface: bool,
+    /// `image.vti`, the input in the VTK files' frame.
+    pub image: bool,
+    /// `phases.csv` and `interfaces.csv`.
+    pub phases: bool,
     /// `report.json`.
     pub report: bool,
 }
@@ -77,6 +87,8 @@ impl Outputs {
         overlay: true,
         mesh: true,
         interface: true,
+        image: true,
+        phases: true,
         report: true,
     };
 
@@ -88,19 +100,23 @@ impl Outputs {
             overlay: false,
             mesh: false,
             interface: false,
+            image: false,
+            phases: false,
             report: false,
         };
         let names = if three_d {
-            "labels, mesh, interface, report or all"
+            "labels, mesh, interface, image, phases, report or all"
         } else {
-            "labels, overlay, mesh, report or all"
+            "labels, overlay, mesh, interface, image, phases, report or all"
         };
         for name in list.split(',').map(str::trim) {
             match name {
                 "labels" => o.labels = true,
                 "overlay" if !three_d => o.overlay = true,
                 "mesh" => o.mesh = true,
-                "interface" if three_d => o.interface = true,
+                "interface" => o.interface = true,
+                "image" => o.image = true,
+                "phases" => o.phases = true,
                 "report" => o.report = true,
                 "all" => o = Self::ALL,
                 _ => {
@@ -113,7 +129,23 @@ impl Outputs {
         Ok(o)
     }
 
-    /// The file names these outputs are, in 2D or 3D, `report.json` last.
+    /// The VTK files among these outputs (listed by `scene.vtm`).
+    pub fn vtk_files(&self) -> Vec<&'static str> {
+        let mut f = Vec::new();
+        if self.image {
+            f.push("image.vti");
+        }
+        if self.mesh {
+            f.push("mesh.vtu");
+        }
+        if self.interface {
+            f.push("interface.vtp");
+        }
+        f
+    }
+
+    /// The file names these outputs are, in 2D or 3D, `report.json` last;
+    /// `scene.vtm` comes with any VTK file.
     pub fn files(&self, three_d: bool) -> Vec<&'static str> {
         let mut f = Vec::new();
         if self.labels {
@@ -122,11 +154,13 @@ impl Outputs {
         if self.overlay && !three_d {
             f.extend(["overlay.png", "overlay.svg"]);
         }
-        if self.mesh {
-            f.push("mesh.vtu");
+        let vtk = self.vtk_files();
+        if !vtk.is_empty() {
+            f.extend(vtk);
+            f.push("scene.vtm");
         }
-        if self.interface && three_d {
-            f.push("interface.vtp");
+        if self.phases {
+            f.extend(["phases.csv", "interfaces.csv"]);
         }
         if self.report {
             f.push("report.json");
@@ -150,20 +184,52 @@ impl Segmented {
     pub(crate) fn write_staged(&self, stage: Staging, dir: &Path, outputs: &Outputs) -> Result<()> {
         let t_write = Instant::now();
         let path = |name: &str| stage.path().join(name);
+        let frame = &self.frame;
         match &self.render {
-            Render::Image(image) => self.write_2d(image, &path, outputs)?,
-            Render::Volume(complex, order) => {
-                if outputs.labels {
-                    let d = [self.dims[0], self.dims[1], self.dims[2]];
-                    save_labels_tiff(path("labels.tif"), d, &self.labels)?;
-                }
+            Render::Image(image, complex, order) => {
+                self.write_2d(image, &path, outputs)?;
                 if outputs.mesh {
-                    complex.write_mesh_vtu(path("mesh.vtu"), order)?;
+                    complex.write_mesh_vtu(path("mesh.vtu"), order, frame)?;
                 }
                 if outputs.interface {
-                    complex.write_interface_vtp(path("interface.vtp"), order)?;
+                    complex.write_interface_vtp(path("interface.vtp"), order, frame)?;
+                }
+                if outputs.image {
+                    write_vti(path("image.vti"), frame, "intensity", image.data())?;
                 }
             }
+            Render::Volume(values, complex, order) => {
+                if outputs.labels {
+                    let d = [self.dims[0], self.dims[1], self.dims[2]];
+                    let resolution = Resolution {
+                        spacing: frame.spacing,
+                        unit: frame.unit.clone(),
+                    };
+                    save_labels_tiff(path("labels.tif"), d, &self.labels, Some(&resolution))?;
+                }
+                if outputs.mesh {
+                    complex.write_mesh_vtu(path("mesh.vtu"), order, frame)?;
+                }
+                if outputs.interface {
+                    complex.write_interface_vtp(path("interface.vtp"), order, frame)?;
+                }
+                if outputs.image {
+                    let values = values.as_deref().ok_or_else(|| {
+                        Error::Usage("image.vti needs the volume's values".into())
+                    })?;
+                    write_vti(path("image.vti"), frame, "intensity", values)?;
+                }
+            }
+        }
+        let vtk = outputs.vtk_files();
+        if !vtk.is_empty() {
+            write_vtm(path("scene.vtm"), &vtk)?;
+        }
+        if outputs.phases {
+            let d = self.dims.len();
+            let m = &self.measurements;
+            write_bytes_atomic(path("phases.csv"), m.phases_csv(d).as_bytes())?;
+            write_bytes_atomic(path("interfaces.csv"), m.interfaces_csv(d).as_bytes())?;
         }
         if outputs.report {
             let mut report = self.report.clone();
@@ -187,30 +253,21 @@ impl Segmented {
         if outputs.labels {
             save_gray8_png(path("labels.png"), w, h, &self.labels)?;
         }
-        let points: Vec<[f64; 2]> = self
-            .vertices
-            .chunks_exact(2)
-            .map(|p| [p[0], p[1]])
-            .collect();
-        let tris: Vec<[u32; 3]> = self
-            .cells
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect();
         if outputs.overlay {
+            let points: Vec<[f64; 2]> = self
+                .vertices
+                .chunks_exact(2)
+                .map(|p| [p[0], p[1]])
+                .collect();
+            let tris: Vec<[u32; 3]> = self
+                .cells
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect();
             let phase: Vec<u32> = self.cell_phases.iter().map(|&p| p as u32).collect();
             let overlay = Overlay::new(image, &points, &tris, &phase);
             overlay.to_png(path("overlay.png"))?;
             overlay.to_svg(path("overlay.svg"))?;
-        }
-        if outputs.mesh {
-            let phase: Vec<i32> = self.cell_phases.iter().map(|&p| p as i32).collect();
-            write_vtu(
-                path("mesh.vtu"),
-                &crate::io::vtk::points_2d_to_3d(&points),
-                Cells::Triangles(&tris),
-                &[("phase", CellArray::I32(&phase))],
-            )?;
         }
         Ok(())
     }

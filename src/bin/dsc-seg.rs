@@ -47,7 +47,8 @@ enum Command {
 #[derive(clap::Args, Debug)]
 struct BatchArgs {
     /// The outputs to write, comma-separated: labels, overlay (2D), mesh,
-    /// interface (3D), report, or all.
+    /// interface, image (image.vti), phases (phases.csv, interfaces.csv),
+    /// report, or all. scene.vtm comes with any VTK file.
     #[arg(long, default_value = "all")]
     outputs: String,
     /// Inputs segmented at once, each on one thread [default: the number of cores].

@@ -6,15 +6,21 @@
 
 pub mod atomic;
 pub mod error;
+pub mod frame;
 pub mod image2;
+pub mod intensity;
 pub mod render;
+pub mod resolution;
 pub mod surface;
 pub mod volume;
+pub mod vti;
 pub mod vtk;
 
 pub use atomic::{write_atomic, write_bytes_atomic};
 pub use error::IoError;
+pub use frame::{Frame, FrameSource};
 pub use image2::{save_gray8_png, save_image_png, Image2};
 pub use render::{phase_color, save_gif, Overlay};
 pub use volume::{save_labels_tiff, save_nifti, Volume};
-pub use vtk::{write_vtp, write_vtu, CellArray, Cells};
+pub use vti::{write_vti, write_vtm};
+pub use vtk::{write_vtp, write_vtp_lines, write_vtu, CellArray, Cells};

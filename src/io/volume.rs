@@ -28,7 +28,10 @@ use std::path::{Path, PathBuf};
 
 use super::atomic::{write_atomic, write_bytes_atomic};
 use super::error::{io_reason, IoError, Result};
+use super::frame::{Affine, Frame, FrameSource};
 use super::image2::{lerp_nodes, Image2};
+use super::intensity::IntensityMap;
+use super::resolution::{tiff_resolution, Resolution};
 
 /// A 3D grayscale volume (x fastest, then y, then z) with intensities in
 /// `[0,1]` and a physical voxel spacing; see the module documentation.
@@ -39,6 +42,12 @@ pub struct Volume {
     nz: usize,
     data: Vec<f32>,
     spacing: [f64; 3],
+    unit: String,
+    /// Loaded to original intensities, when known.
+    intensity: Option<IntensityMap>,
+    /// Index to world (a NIfTI affine); `None`: `index · spacing`.
+    affine: Option<Affine>,
+    source: FrameSource,
 }
 
 impl Volume {
@@ -60,6 +69,10 @@ impl Volume {
             nz,
             data,
             spacing: [1.0; 3],
+            unit: "px".into(),
+            intensity: None,
+            affine: None,
+            source: FrameSource::Default,
         }
     }
 
@@ -85,6 +98,45 @@ impl Volume {
     pub fn with_spacing(mut self, spacing: [f64; 3]) -> Self {
         self.spacing = spacing;
         self
+    }
+
+    /// Returns the volume with the given length unit of its spacing.
+    pub fn with_unit(mut self, unit: &str) -> Self {
+        self.unit = unit.to_string();
+        self
+    }
+
+    /// Returns the volume placed in the world by `affine` (index to world).
+    pub fn with_affine(mut self, affine: Affine, source: FrameSource) -> Self {
+        self.affine = Some(affine);
+        self.source = source;
+        self
+    }
+
+    /// Where the voxels sit in the world (see [`Frame`]).
+    pub fn frame(&self) -> Frame {
+        let dims = self.dims();
+        let frame = match self.affine {
+            Some(a) => Frame::volume_affine(dims, self.spacing, &self.unit, a),
+            None => Frame::volume(dims, self.spacing, &self.unit),
+        };
+        frame.with_source(self.source)
+    }
+
+    /// How the loaded intensities map back to the file's (`None`: unknown).
+    pub fn intensity(&self) -> Option<IntensityMap> {
+        self.intensity
+    }
+
+    /// Returns the volume with a known map back to the file's intensities.
+    pub fn with_intensity(mut self, map: IntensityMap) -> Self {
+        self.intensity = Some(map);
+        self
+    }
+
+    /// The length unit of [`Volume::spacing`] (`"px"` when unknown).
+    pub fn unit(&self) -> &str {
+        &self.unit
     }
 
     /// Loads a volume, choosing the reader from the path:
@@ -128,7 +180,7 @@ impl Volume {
             },
         };
         let mut dec = Decoder::new(BufReader::new(file)).map_err(bad)?;
-        let spacing = imagej_spacing(&mut dec);
+        let resolution = tiff_resolution(&mut dec);
         let mut raw = Samples::U8(Vec::new());
         let (mut nx, mut ny, mut nz) = (0usize, 0usize, 0usize);
         loop {
@@ -195,15 +247,24 @@ impl Volume {
             }
             dec.next_image().map_err(bad)?;
         }
+        let (data, intensity) = raw.normalise().ok_or_else(|| IoError::MalformedTiff {
+            path: path.to_path_buf(),
+            reason: NO_FINITE.into(),
+        })?;
         Ok(Volume {
             nx,
             ny,
             nz,
-            data: raw.normalise().ok_or_else(|| IoError::MalformedTiff {
-                path: path.to_path_buf(),
-                reason: NO_FINITE.into(),
-            })?,
-            spacing,
+            data,
+            intensity: Some(intensity),
+            spacing: resolution.as_ref().map_or([1.0; 3], |r| r.spacing),
+            unit: resolution.as_ref().map_or("px".into(), |r| r.unit.clone()),
+            affine: None,
+            source: if resolution.is_some() {
+                FrameSource::TiffResolution
+            } else {
+                FrameSource::Default
+            },
         })
     }
 
@@ -346,42 +407,6 @@ impl Volume {
     }
 }
 
-/// Best-effort voxel size from Fiji/ImageJ metadata on the current (first)
-/// page: x/y from the `XResolution`/`YResolution` tags (pixels per unit) and
-/// z from `spacing=` in an `ImageJ=` image description. Anything missing or
-/// unusable gives 1; other writers' metadata is not interpreted.
-fn imagej_spacing<R: std::io::Read + std::io::Seek>(
-    dec: &mut tiff::decoder::Decoder<R>,
-) -> [f64; 3] {
-    use tiff::decoder::ifd::Value;
-    use tiff::tags::Tag;
-    let mut spacing = [1.0; 3];
-    let Ok(Some(Value::Ascii(desc))) = dec.find_tag(Tag::ImageDescription) else {
-        return spacing;
-    };
-    if !desc.starts_with("ImageJ=") {
-        return spacing;
-    }
-    let valid = |v: f64| v.is_finite() && v > 0.0;
-    for (axis, tag) in [(0, Tag::XResolution), (1, Tag::YResolution)] {
-        if let Ok(Some(Value::Rational(n, d))) = dec.find_tag(tag) {
-            let v = f64::from(d) / f64::from(n);
-            if valid(v) {
-                spacing[axis] = v;
-            }
-        }
-    }
-    if let Some(z) = desc
-        .lines()
-        .find_map(|l| l.strip_prefix("spacing="))
-        .and_then(|v| v.trim().parse::<f64>().ok())
-        .filter(|&v| valid(v))
-    {
-        spacing[2] = z;
-    }
-    spacing
-}
-
 /// Raw samples collected while reading a TIFF stack.
 enum Samples {
     U8(Vec<u8>),
@@ -399,10 +424,16 @@ impl Samples {
     }
 
     /// `None` when no sample is finite (see [`min_max_normalise`]).
-    fn normalise(self) -> Option<Vec<f32>> {
+    fn normalise(self) -> Option<(Vec<f32>, IntensityMap)> {
         match self {
-            Samples::U8(v) => Some(v.into_iter().map(|s| s as f32 / 255.0).collect()),
-            Samples::U16(v) => Some(v.into_iter().map(|s| s as f32 / 65535.0).collect()),
+            Samples::U8(v) => Some((
+                v.into_iter().map(|s| s as f32 / 255.0).collect(),
+                IntensityMap::unsigned(8),
+            )),
+            Samples::U16(v) => Some((
+                v.into_iter().map(|s| s as f32 / 65535.0).collect(),
+                IntensityMap::unsigned(16),
+            )),
             Samples::F64(v) => min_max_normalise(&v),
         }
     }
@@ -433,7 +464,7 @@ fn append_f64(v: &mut Vec<f64>, page: tiff::decoder::DecodingResult) -> bool {
 /// Maps values linearly so that the finite minimum becomes 0 and the maximum
 /// 1; constant data becomes 0, NaN becomes 0. `None` when no value is finite:
 /// such data holds no image, and all zeros would pass it off as a constant one.
-fn min_max_normalise(v: &[f64]) -> Option<Vec<f32>> {
+fn min_max_normalise(v: &[f64]) -> Option<(Vec<f32>, IntensityMap)> {
     let (lo, hi) = v
         .iter()
         .filter(|s| s.is_finite())
@@ -454,7 +485,7 @@ fn min_max_normalise(v: &[f64]) -> Option<Vec<f32>> {
             }
         })
         .collect();
-    Some(data)
+    Some((data, IntensityMap::stretched(lo, hi)))
 }
 
 /// Compares strings in natural order: runs of ASCII digits compare by
@@ -617,19 +648,25 @@ fn parse_nifti(path: &Path, b: &[u8]) -> Result<Volume> {
     // NIfTI: scl_slope == 0 means "no scaling".
     let scaled = slope != 0.0 && slope.is_finite() && (slope != 1.0 || inter != 0.0);
     let chunks = raw.chunks_exact(bytes_per);
-    let data: Vec<f32> = match (datatype, scaled) {
-        (2, false) => raw.iter().map(|&s| s as f32 / 255.0).collect(),
-        (512, false) => chunks
-            .map(|c| {
-                let a = [c[0], c[1]];
-                let v = if le {
-                    u16::from_le_bytes(a)
-                } else {
-                    u16::from_be_bytes(a)
-                };
-                v as f32 / 65535.0
-            })
-            .collect(),
+    let (data, intensity): (Vec<f32>, IntensityMap) = match (datatype, scaled) {
+        (2, false) => (
+            raw.iter().map(|&s| s as f32 / 255.0).collect(),
+            IntensityMap::unsigned(8),
+        ),
+        (512, false) => (
+            chunks
+                .map(|c| {
+                    let a = [c[0], c[1]];
+                    let v = if le {
+                        u16::from_le_bytes(a)
+                    } else {
+                        u16::from_be_bytes(a)
+                    };
+                    v as f32 / 65535.0
+                })
+                .collect(),
+            IntensityMap::unsigned(16),
+        ),
         _ => {
             let values: Vec<f64> = chunks
                 .map(|c| {
@@ -653,7 +690,9 @@ fn parse_nifti(path: &Path, b: &[u8]) -> Result<Volume> {
             1.0
         }
     };
-    Ok(Volume::from_raw(n[0], n[1], n[2], data).with_spacing([sp(1), sp(2), sp(3)]))
+    Ok(Volume::from_raw(n[0], n[1], n[2], data)
+        .with_spacing([sp(1), sp(2), sp(3)])
+        .with_intensity(intensity))
 }
 
 /// Decodes one NIfTI sample of `datatype` from its bytes.
@@ -751,8 +790,18 @@ pub fn save_nifti(path: impl AsRef<Path>, volume: &Volume) -> Result<()> {
 
 /// Saves `labels` (`dims = [nx, ny, nz]`, x fastest as in [`Volume`]) as a
 /// multi-page 8-bit grayscale TIFF with one page per z slice, atomically.
-/// Fiji/ImageJ and tifffile open it as a stack.
-pub fn save_labels_tiff(path: impl AsRef<Path>, dims: [usize; 3], labels: &[u8]) -> Result<()> {
+/// Fiji/ImageJ and tifffile open it as a stack. With a `resolution`, every
+/// page carries it as Fiji/ImageJ does: pixels per unit in
+/// `XResolution`/`YResolution` and `unit=`/`spacing=` in an `ImageJ=`
+/// description (read back by [`Volume::load_tiff`] and `vtkTIFFReader`).
+pub fn save_labels_tiff(
+    path: impl AsRef<Path>,
+    dims: [usize; 3],
+    labels: &[u8],
+    resolution: Option<&Resolution>,
+) -> Result<()> {
+    use tiff::encoder::colortype::Gray8;
+    use tiff::tags::{ResolutionUnit, Tag};
     let path = path.as_ref();
     let [nx, ny, nz] = dims;
     if labels.len() != nx * ny * nz {
@@ -773,11 +822,36 @@ pub fn save_labels_tiff(path: impl AsRef<Path>, dims: [usize; 3], labels: &[u8])
     {
         let mut enc = tiff::encoder::TiffEncoder::new(&mut buf).map_err(enc_err)?;
         for slice in labels.chunks_exact(nx * ny) {
-            enc.write_image::<tiff::encoder::colortype::Gray8>(w, h, slice)
-                .map_err(enc_err)?;
+            let mut page = enc.new_image::<Gray8>(w, h).map_err(enc_err)?;
+            if let Some(r) = resolution {
+                let desc = imagej_description(nz, r);
+                page.encoder()
+                    .write_tag(Tag::ImageDescription, desc.as_str())
+                    .map_err(enc_err)?;
+                page.resolution_unit(ResolutionUnit::None);
+                page.x_resolution(rational(1.0 / r.spacing[0]));
+                page.y_resolution(rational(1.0 / r.spacing[1]));
+            }
+            page.write_data(slice).map_err(enc_err)?;
         }
     }
     write_bytes_atomic(path, buf.get_ref())
+}
+
+/// Fiji/ImageJ's description of a stack of `nz` slices with this resolution.
+fn imagej_description(nz: usize, r: &Resolution) -> String {
+    let unit = if r.unit == "um" { "micron" } else { &r.unit };
+    format!(
+        "ImageJ=1.11a\nimages={nz}\nslices={nz}\nunit={unit}\nspacing={}\nloop=false\n",
+        r.spacing[2]
+    )
+}
+
+/// A positive number as a TIFF rational (about nine significant digits).
+fn rational(v: f64) -> tiff::encoder::Rational {
+    let d = (1e9 / v.max(1.0)).clamp(1.0, u32::MAX as f64).round() as u32;
+    let n = (v * f64::from(d)).round().clamp(1.0, u32::MAX as f64) as u32;
+    tiff::encoder::Rational { n, d }
 }
 
 #[cfg(test)]
@@ -936,7 +1010,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let labels: Vec<u8> = (0..3 * 2 * 4).map(|i| (i * 10) as u8).collect();
         let p = dir.path().join("labels.tif");
-        save_labels_tiff(&p, [3, 2, 4], &labels).unwrap();
+        save_labels_tiff(&p, [3, 2, 4], &labels, None).unwrap();
         let v = Volume::load(&p).unwrap();
         assert_eq!(v.dims(), [3, 2, 4]);
         for (a, b) in v.data().iter().zip(&labels) {
@@ -980,7 +1054,7 @@ mod tests {
     fn tiff_truncated_and_corrupt() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("ok.tif");
-        save_labels_tiff(&p, [8, 8, 3], &[7; 192]).unwrap();
+        save_labels_tiff(&p, [8, 8, 3], &[7; 192], None).unwrap();
         let bytes = std::fs::read(&p).unwrap();
         for cut in [0, 4, 8, 100, bytes.len() - 10] {
             let t = dir.path().join(format!("cut{cut}.tif"));
@@ -1066,7 +1140,7 @@ mod tests {
                 (0..ny).flat_map(move |y| (0..nx).map(move |x| ((x + 2 * y + 3 * z) % 256) as u8))
             })
             .collect();
-        save_labels_tiff(dir.join("rust_labels.tif"), [nx, ny, nz], &labels).unwrap();
+        save_labels_tiff(dir.join("rust_labels.tif"), [nx, ny, nz], &labels, None).unwrap();
         let vol = Volume::from_fn(nx, ny, nz, |x, y, z| (x + 10 * y + 100 * z) as f32 / 1000.0)
             .with_spacing([0.5, 0.75, 2.0]);
         save_nifti(dir.join("rust_volume.nii.gz"), &vol).unwrap();

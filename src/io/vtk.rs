@@ -137,6 +137,32 @@ pub fn write_vtp(
     write_vtk(path, data)
 }
 
+/// Writes XML polydata (`.vtp`) made of line segments with named cell-data
+/// arrays; used for 2D interfaces (arrays `phase` and `phase_other`).
+pub fn write_vtp_lines(
+    path: impl AsRef<Path>,
+    points: &[[f64; 3]],
+    segments: &[[u32; 2]],
+    cell_data: &[(&str, CellArray<'_>)],
+) -> Result<()> {
+    let path = path.as_ref();
+    let (connectivity, offsets) = flatten(path, points.len(), segments)?;
+    let piece = PolyDataPiece {
+        points: flat_points(points),
+        lines: Some(VertexNumbers::XML {
+            connectivity,
+            offsets,
+        }),
+        data: attributes(path, segments.len(), cell_data)?,
+        ..Default::default()
+    };
+    let data = DataSet::PolyData {
+        meta: None,
+        pieces: vec![Piece::Inline(Box::new(piece))],
+    };
+    write_vtk(path, data)
+}
+
 /// Flattens the points into the `x y z x y z ...` buffer VTK expects.
 fn flat_points(points: &[[f64; 3]]) -> IOBuffer {
     IOBuffer::F64(points.iter().flatten().copied().collect())

@@ -33,9 +33,10 @@ pub mod forces;
 pub mod image;
 pub mod init;
 pub mod integrate;
+pub mod measurements;
 pub mod model;
 pub mod models;
-pub mod output3d;
+pub mod output;
 pub mod params;
 pub mod raster;
 #[cfg(feature = "tetgen")]

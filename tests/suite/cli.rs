@@ -55,13 +55,27 @@ pub(crate) const SEGMENT: Sub = Sub {
         "overlay.png",
         "overlay.svg",
         "mesh.vtu",
+        "interface.vtp",
+        "image.vti",
+        "scene.vtm",
+        "phases.csv",
+        "interfaces.csv",
         "report.json",
     ],
 };
 
 pub(crate) const SEGMENT3D: Sub = Sub {
     name: "segment3d",
-    outputs: &["labels.tif", "mesh.vtu", "interface.vtp", "report.json"],
+    outputs: &[
+        "labels.tif",
+        "mesh.vtu",
+        "interface.vtp",
+        "image.vti",
+        "scene.vtm",
+        "phases.csv",
+        "interfaces.csv",
+        "report.json",
+    ],
 };
 
 /// Runs `dsc-seg SUB ARGS --out OUT --quiet`, expects failure with exactly one

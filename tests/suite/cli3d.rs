@@ -26,7 +26,7 @@ fn values(n: usize) -> Vec<u8> {
 
 fn write_tiff(dir: &Path, name: &str, dims: [usize; 3], data: &[u8]) -> PathBuf {
     let p = dir.join(name);
-    save_labels_tiff(&p, dims, data).unwrap();
+    save_labels_tiff(&p, dims, data, None).unwrap();
     p
 }
 
