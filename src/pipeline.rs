@@ -11,8 +11,8 @@ use crate::error::{Error, Result};
 use crate::io::intensity::IntensityMap;
 use crate::io::resolution::image_frame;
 use crate::io::{save_gray8_png, Frame, Image2, Overlay};
-use crate::segment::measurements::Measurements;
 use crate::phantom::{self, Phantom2Kind};
+use crate::segment::measurements::Measurements;
 use crate::segment::{ImageView, Init, Raster, SegmentParams, SegmentReport, Segmentation};
 use crate::segmented::{Outputs, Render, Segmented};
 use crate::staging::Staging;
@@ -466,7 +466,8 @@ pub(crate) fn add_frame_and_phases(
     frame: &Frame,
     measurements: &Measurements,
 ) -> Result<()> {
-    let value = |v: serde_json::Result<serde_json::Value>| v.map_err(|e| Error::Usage(e.to_string()));
+    let value =
+        |v: serde_json::Result<serde_json::Value>| v.map_err(|e| Error::Usage(e.to_string()));
     report["frame"] = value(serde_json::to_value(frame))?;
     report["phases"] = value(serde_json::to_value(measurements))?;
     Ok(())
