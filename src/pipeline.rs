@@ -10,7 +10,7 @@ use crate::dim::D2;
 use crate::error::{Error, Result};
 use crate::io::intensity::IntensityMap;
 use crate::io::resolution::image_frame;
-use crate::io::{save_gray8_png, Frame, Image2, Overlay};
+use crate::io::{save_gray8_png, Frame, Image2, Overlay, SampleType};
 use crate::phantom::{self, Phantom2Kind};
 use crate::segment::measurements::Measurements;
 use crate::segment::{ImageView, Init, Raster, SegmentParams, SegmentReport, Segmentation};
@@ -173,13 +173,55 @@ impl<'a> RunReport<'a> {
     }
 }
 
-/// The 2D report: the shared fields and the image size.
+/// The 2D report: the shared fields, the image size and the input's units.
 #[derive(Serialize)]
 struct Report<'a> {
     #[serde(flatten)]
     run: RunReport<'a>,
     width: usize,
     height: usize,
+    input: InputSummary,
+}
+
+/// The input's sample type and its intensities in the file's own units (the
+/// rest of the report is in the loaded units: 8/16-bit data scaled to `[0,1]`).
+#[derive(Serialize)]
+struct InputSummary {
+    sample_type: SampleType,
+    min: f64,
+    max: f64,
+    /// The final phase means by rank (output values 0, 1, ...), in the file's units.
+    phase_means: Vec<Option<f64>>,
+}
+
+impl InputSummary {
+    fn new(image: &Image2, report: &SegmentReport, ordered_means: &[Option<f64>]) -> Self {
+        let t = image.sample_type();
+        InputSummary {
+            sample_type: t,
+            min: t.to_original(report.intensity.min),
+            max: t.to_original(report.intensity.max),
+            phase_means: ordered_means
+                .iter()
+                .map(|m| m.map(|m| t.to_original(m)))
+                .collect(),
+        }
+    }
+}
+
+/// The image as the overlay shows it: values outside `[0,1]` (float or
+/// signed data) mapped linearly onto `[0,1]`, other images unchanged.
+fn display_image<'i>(image: &'i Image2, report: &SegmentReport) -> std::borrow::Cow<'i, Image2> {
+    let (lo, hi) = (report.intensity.min, report.intensity.max);
+    if lo >= 0.0 && hi <= 1.0 || hi <= lo {
+        return std::borrow::Cow::Borrowed(image);
+    }
+    let data = image
+        .data()
+        .iter()
+        .map(|&v| ((v as f64 - lo) / (hi - lo)) as f32)
+        .collect();
+    std::borrow::Cow::Owned(Image2::from_raw(image.width(), image.height(), data))
 }
 
 /// The final mesh as the overlay and VTK writers want it: 2D points,
@@ -419,17 +461,20 @@ pub(crate) fn segment_image_then<T>(
         segment,
         write: 0.0,
     };
+    let run = RunReport::new(
+        "dsc-seg",
+        (&provenance.source, provenance.init_labels.as_deref()),
+        &seg,
+        &report,
+        times,
+        truth_dice,
+    );
+    let input = InputSummary::new(image, &report, &run.ordered_means);
     let rep = Report {
-        run: RunReport::new(
-            "dsc-seg",
-            (&provenance.source, provenance.init_labels.as_deref()),
-            &seg,
-            &report,
-            times,
-            truth_dice,
-        ),
+        run,
         width: w,
         height: h,
+        input,
     };
     let mut report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
     let frame = match &provenance.source {
@@ -445,6 +490,7 @@ pub(crate) fn segment_image_then<T>(
         Measurements::from_labels(&labels, image.data(), intensity, &frame, params.phases)
             .with_mesh_2d(seg.complex(), &order, &frame);
     add_frame_and_phases(&mut report_json, &frame, &measurements)?;
+    let shown = display_image(image, &report).into_owned();
     let result = Segmented {
         dims: vec![w, h],
         labels,
@@ -455,7 +501,7 @@ pub(crate) fn segment_image_then<T>(
         report: report_json,
         frame,
         measurements,
-        render: Render::Image(image.clone(), Box::new(seg.complex().clone()), order),
+        render: Render::Image(shown, Box::new(seg.complex().clone()), order),
     };
     Ok((result, ready))
 }

@@ -12,16 +12,20 @@
 //!
 //! # Intensities
 //!
-//! Values are `f32` scaled to `[0,1]`: 8-bit samples are divided by 255,
-//! 16-bit samples by 65535, and floating-point samples are kept as they are
-//! (they may lie outside `[0,1]`). Colour images are reduced to luminance with
-//! the Rec. 709 weights `0.2126 R + 0.7152 G + 0.0722 B`, applied to the stored
-//! (gamma-encoded) values; alpha is ignored.
+//! Values are `f32`: 8-bit samples are divided by 255, 16-bit samples by
+//! 65535 (so both lie in `[0,1]`), and floating-point and signed or 32-bit
+//! integer samples (TIFF: Fiji's 32-bit type, CT in Hounsfield units) are kept
+//! as they are, negative values included. [`Image2::sample_type`] says which,
+//! and [`SampleType::to_original`] maps a value back to the file's units.
+//! Colour images are reduced to luminance with the Rec. 709 weights
+//! `0.2126 R + 0.7152 G + 0.0722 B`, applied to the stored (gamma-encoded)
+//! values; alpha is ignored.
 
 use std::io::{self, Write};
 use std::path::Path;
 
-use image::{DynamicImage, ImageError, ImageReader};
+use image::{DynamicImage, ImageError, ImageFormat, ImageReader};
+use serde::Serialize;
 
 use super::atomic::write_atomic;
 use super::error::{io_reason, IoError, Result};
@@ -29,13 +33,40 @@ use super::error::{io_reason, IoError, Result};
 /// Rec. 709 luminance weights for R, G, B.
 const REC709: [f32; 3] = [0.2126, 0.7152, 0.0722];
 
-/// A row-major grayscale image with intensities in `[0,1]`; see the module
-/// documentation for the coordinate convention.
+/// How the samples of an image were stored, and the factor that maps the
+/// loaded values back to the stored ones.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SampleType {
+    /// 8-bit unsigned integers (loaded ÷ 255).
+    Uint8,
+    /// 16-bit unsigned integers (loaded ÷ 65535).
+    Uint16,
+    /// Any other integer type (signed or 32/64-bit), kept as is.
+    Int,
+    /// Floating point, kept as is.
+    Float,
+}
+
+impl SampleType {
+    /// The stored value of a loaded value `v`.
+    pub fn to_original(self, v: f64) -> f64 {
+        match self {
+            SampleType::Uint8 => v * 255.0,
+            SampleType::Uint16 => v * 65535.0,
+            SampleType::Int | SampleType::Float => v,
+        }
+    }
+}
+
+/// A row-major grayscale image (8/16-bit data scaled to `[0,1]`, other
+/// types as stored); see the module documentation for the coordinate convention.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image2 {
     width: usize,
     height: usize,
     data: Vec<f32>,
+    sample_type: SampleType,
 }
 
 impl Image2 {
@@ -55,6 +86,7 @@ impl Image2 {
             width,
             height,
             data,
+            sample_type: SampleType::Float,
         }
     }
 
@@ -71,12 +103,15 @@ impl Image2 {
             width,
             height,
             data,
+            sample_type: SampleType::Float,
         }
     }
 
     /// Loads any image the `image` crate decodes (PNG, JPEG, TIFF, GIF, BMP,
     /// PNM), 8 or 16 bit or float, gray or colour, converting it to
-    /// luminance in `[0,1]` as described in the module documentation.
+    /// luminance as described in the module documentation. Grayscale TIFFs
+    /// the `image` crate refuses (32-bit float as Fiji writes them, signed
+    /// or 32-bit integers) are read with the `tiff` crate, first page only.
     ///
     /// Corrupt or truncated files give an error, never a panic.
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
@@ -85,8 +120,73 @@ impl Image2 {
             .map_err(|e| IoError::unreadable(path, e))?
             .with_guessed_format()
             .map_err(|e| IoError::unreadable(path, e))?;
-        let img = reader.decode().map_err(|e| image_error(path, e))?;
-        Self::from_dynamic(path, img)
+        let is_tiff = reader.format() == Some(ImageFormat::Tiff);
+        match reader.decode() {
+            Ok(img) => Self::from_dynamic(path, img),
+            Err(ImageError::Unsupported(_)) if is_tiff => Self::load_gray_tiff(path),
+            Err(e) => Err(image_error(path, e)),
+        }
+    }
+
+    /// The first page of a grayscale TIFF of any integer or float sample
+    /// type; 8/16-bit unsigned samples are scaled as [`load`](Self::load)
+    /// scales them, every other type is kept as stored.
+    fn load_gray_tiff(path: &Path) -> Result<Self> {
+        use tiff::decoder::{Decoder, DecodingResult as D};
+        let bad = |e: tiff::TiffError| IoError::MalformedTiff {
+            path: path.to_path_buf(),
+            reason: match e {
+                tiff::TiffError::IoError(io) => io_reason(&io),
+                e => e.to_string(),
+            },
+        };
+        let file = std::fs::File::open(path).map_err(|e| IoError::unreadable(path, e))?;
+        let mut dec = Decoder::new(io::BufReader::new(file)).map_err(bad)?;
+        let (w, h) = dec.dimensions().map_err(bad)?;
+        let (width, height) = (w as usize, h as usize);
+        if width == 0 || height == 0 {
+            return Err(IoError::empty(path, &[width, height]));
+        }
+        match dec.colortype().map_err(bad)? {
+            tiff::ColorType::Gray(_) => {}
+            other => {
+                return Err(IoError::Unsupported {
+                    path: path.to_path_buf(),
+                    reason: format!("TIFF colour type {other:?}; expected grayscale"),
+                })
+            }
+        }
+        let (data, sample_type): (Vec<f32>, SampleType) = match dec.read_image().map_err(bad)? {
+            D::U8(p) => (
+                p.iter().map(|&v| v as f32 / 255.0).collect(),
+                SampleType::Uint8,
+            ),
+            D::U16(p) => (
+                p.iter().map(|&v| v as f32 / 65535.0).collect(),
+                SampleType::Uint16,
+            ),
+            D::U32(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
+            D::U64(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
+            D::I8(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
+            D::I16(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
+            D::I32(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
+            D::I64(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
+            D::F16(p) => (p.iter().map(|v| v.to_f32()).collect(), SampleType::Float),
+            D::F32(p) => (p, SampleType::Float),
+            D::F64(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Float),
+        };
+        if data.len() != width * height {
+            return Err(IoError::MalformedTiff {
+                path: path.to_path_buf(),
+                reason: format!("{} samples for a {width}x{height} page", data.len()),
+            });
+        }
+        Ok(Image2 {
+            width,
+            height,
+            data,
+            sample_type,
+        })
     }
 
     /// Converts a decoded [`DynamicImage`] (`path` is only used in errors).
@@ -96,6 +196,11 @@ impl Image2 {
             return Err(IoError::empty(path, &[width, height]));
         }
         let lum = |r: f32, g: f32, b: f32| REC709[0] * r + REC709[1] * g + REC709[2] * b;
+        let sample_type = match img.color().bytes_per_pixel() / img.color().channel_count() {
+            1 => SampleType::Uint8,
+            2 => SampleType::Uint16,
+            _ => SampleType::Float,
+        };
         let data: Vec<f32> = match img {
             DynamicImage::ImageLuma8(b) => b.pixels().map(|p| p[0] as f32 / 255.0).collect(),
             DynamicImage::ImageLumaA8(b) => b.pixels().map(|p| p[0] as f32 / 255.0).collect(),
@@ -130,7 +235,19 @@ impl Image2 {
             width,
             height,
             data,
+            sample_type,
         })
+    }
+
+    /// How the samples were stored ([`SampleType::Float`] for images built in memory).
+    pub fn sample_type(&self) -> SampleType {
+        self.sample_type
+    }
+
+    /// The image with its sample type set (e.g. for data loaded elsewhere).
+    pub fn with_sample_type(mut self, sample_type: SampleType) -> Self {
+        self.sample_type = sample_type;
+        self
     }
 
     /// Number of columns `W`.

@@ -6,9 +6,11 @@ use super::force_stage::{ForceInputs, ForceStage};
 use super::forces::ForceField;
 use super::image::ImageView;
 use super::integrate::{CellCache, CellStats, PhaseStats};
+use super::intensity::IntensityStats;
 use super::model::{Flow, InitContext, LabelContext, LabelView, Models};
-use super::params::SegmentParams;
+use super::params::{Init, SegmentParams};
 use super::raster::Raster;
+use super::thresholds::split_histogram;
 use crate::complex::Complex;
 use crate::dsc::{DscParams, DscWorkspace};
 use serde::Serialize;
@@ -152,8 +154,15 @@ pub struct SegmentReport {
     pub final_means: Vec<Option<f64>>,
     /// Final energy.
     pub final_energy: f64,
-    /// Length weight ν used in the energy and flip guard.
+    /// Length weight ν used in the energy and flip guard (intensity² per
+    /// pixel of length, in the input's units).
     pub length_weight_abs: f64,
+    /// The input's intensity figures (range, robust range, noise estimate).
+    pub intensity: IntensityStats,
+    /// The thresholds of the initialisation, in the input's units: the
+    /// histogram split of [`Init::Histogram`], the interval bounds of
+    /// [`Init::Range`]; empty for the other initialisations.
+    pub initial_thresholds: Vec<f64>,
     /// Per-iteration records.
     pub history: Vec<IterationRecord>,
     /// Stage timings.
@@ -202,6 +211,8 @@ pub struct Segmentation<'a, K: Raster> {
     predict_flips: bool,
     nu: f64,
     range: (f64, f64),
+    intensity: IntensityStats,
+    initial_thresholds: Vec<f64>,
     times: StageTimes,
     history: Vec<IterationRecord>,
     quiet_iterations: usize,
@@ -295,6 +306,19 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let mut cell_cache = CellCache::new();
         let helper = Helper::new();
         cell_cache.integrate_on(helper.here(), &complex, &image, &mut cells);
+        let intensity = IntensityStats::of(&image);
+        let classes = (!given && params.init == Init::Histogram)
+            .then(|| split_histogram(&intensity.cell_histogram(&cells), params.phases));
+        let initial_thresholds = match (&classes, &params.init) {
+            (Some(c), _) => c.thresholds.clone(),
+            (None, Init::Range) if !given => {
+                let n = params.phases as f64;
+                (1..params.phases)
+                    .map(|k| range.0 + (range.1 - range.0) * k as f64 / n)
+                    .collect()
+            }
+            _ => Vec::new(),
+        };
         let mut hints = if given {
             vec![None; params.phases]
         } else {
@@ -304,6 +328,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 cells: &cells,
                 params: &params,
                 range,
+                classes: classes.as_ref(),
             })?
         };
         if let Some(c) = complex
@@ -340,6 +365,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             predict_flips: true,
             nu: 0.0,
             range,
+            intensity,
+            initial_thresholds,
             times: StageTimes::default(),
             history: Vec::new(),
             quiet_iterations: 0,
@@ -353,8 +380,11 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         Ok(s)
     }
 
-    /// ν = `length_weight` × (smallest gap between known means) (intensities
-    /// in `[0, 1]`), or × the dynamic range over N if fewer than two means are known.
+    /// ν = `length_weight` × Δ × R: Δ the smallest gap between the known
+    /// means (the robust range over N if fewer than two are known), R the
+    /// robust range ([`IntensityStats::scale`]). Both scale with the
+    /// intensities, so ν is in intensity² per pixel like the data term per
+    /// pixel, and `a·I + b` gives the same labels as `I`.
     fn length_weight(&self) -> f64 {
         let mut m: Vec<f64> = self.phases.mean.iter().flatten().copied().collect();
         m.sort_by(f64::total_cmp);
@@ -363,12 +393,13 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             .map(|w| w[1] - w[0])
             .filter(|&g| g > 0.0)
             .fold(f64::INFINITY, f64::min);
+        let scale = self.intensity.scale();
         let gap = if gap.is_finite() {
             gap
         } else {
-            (self.range.1 - self.range.0) / self.params.phases as f64
+            scale / self.params.phases as f64
         };
-        self.params.length_weight * gap
+        self.params.length_weight * gap * scale
     }
 
     /// The complex in its current state.
@@ -692,6 +723,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             final_means: self.phases.mean.clone(),
             final_energy,
             length_weight_abs: self.nu,
+            intensity: self.intensity.clone(),
+            initial_thresholds: self.initial_thresholds.clone(),
             history: self.history.clone(),
             times: self.times,
             vertices: self.complex.vertex_count(),

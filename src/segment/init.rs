@@ -1,22 +1,26 @@
-//! Initial labelling of the cells: by range, by disks, or from a label image.
+//! Initial labelling of the cells: by histogram thresholds, by range, by
+//! disks, or from a label image.
 
 use super::error::SegmentError;
 use super::image::ImageView;
 use super::integrate::CellStats;
 use super::params::{Init, SegmentParams};
 use super::raster::Raster;
+use super::thresholds::Classes;
 use crate::complex::{CellId, Complex, Label};
 use crate::dim::Point;
 
 /// Labels the cells of `complex` per `params.init` and returns a starting mean
-/// per phase where one is known before integration (the interval midpoints of
-/// [`Init::Range`]; `None` otherwise).
+/// per phase where one is known before integration (the class means of
+/// [`Init::Histogram`], the interval midpoints of [`Init::Range`]; `None`
+/// otherwise). `classes` is the histogram split [`Init::Histogram`] uses.
 pub fn initialise<K: Raster>(
     complex: &mut Complex<K>,
     image: &ImageView<'_>,
     params: &SegmentParams,
     cells: &[CellStats],
     range: (f64, f64),
+    classes: Option<&Classes>,
 ) -> Result<Vec<Option<f64>>, SegmentError> {
     let n = params.phases;
     let ids: Vec<CellId> = complex.cell_ids().collect();
@@ -29,14 +33,30 @@ pub fn initialise<K: Raster>(
         }
         g * (1.0 / K::NV as f64)
     };
+    let cell_mean = |cx: &Complex<K>, c: CellId| {
+        cells[c.index()]
+            .mean()
+            .unwrap_or_else(|| K::sample(image, centroid(cx, c)))
+    };
     match &params.init {
+        Init::Histogram => {
+            let classes = classes.ok_or_else(|| {
+                SegmentError::Init("the histogram initialisation needs the histogram".into())
+            })?;
+            for &c in &ids {
+                let k = classes.class_of(cell_mean(complex, c)).min(n - 1);
+                changes.push((c, k as Label));
+            }
+            complex.set_labels(&changes);
+            let mut means = classes.means.clone();
+            means.resize(n, None);
+            Ok(means)
+        }
         Init::Range => {
             let (lo, hi) = range;
             let width = (hi - lo) / n as f64;
             for &c in &ids {
-                let m = cells[c.index()]
-                    .mean()
-                    .unwrap_or_else(|| K::sample(image, centroid(complex, c)));
+                let m = cell_mean(complex, c);
                 let k = (((m - lo) / width).floor().max(0.0) as usize).min(n - 1);
                 changes.push((c, k as Label));
             }

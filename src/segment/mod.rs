@@ -7,7 +7,10 @@
 //!   samples along a facet, interpolation), implemented for [`D2`](crate::dim::D2);
 //! - [`integrate`]: per-cell sums (exactly once per pixel, in parallel) and
 //!   per-phase means;
-//! - [`init`]: range/interval, disk and label-image initialisations;
+//! - [`intensity`]: the input's intensity scale (robust range, noise,
+//!   histogram), which makes the energy invariant to `a·I + b`;
+//! - [`thresholds`]: least-variance histogram splits (multi-Otsu, k-means++);
+//! - [`init`]: histogram, range/interval, disk and label-image initialisations;
 //! - [`forces`]: region forces (eqs. 5–7) and rigidity (eq. 2);
 //! - `force_stage`: an iteration's force terms summed, its step and the
 //!   destinations of the deformation;
@@ -34,6 +37,7 @@ pub mod image;
 pub mod init;
 pub mod integrate;
 pub mod measurements;
+pub mod intensity;
 pub mod model;
 pub mod models;
 pub mod output;
@@ -41,6 +45,7 @@ pub mod params;
 pub mod raster;
 #[cfg(feature = "tetgen")]
 pub mod tetgen_init;
+pub mod thresholds;
 pub mod voxel3d;
 
 pub use driver::{IterationRecord, SegmentReport, Segmentation, StageTimes, StopReason};

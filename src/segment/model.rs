@@ -30,6 +30,7 @@ use super::integrate::{CellStats, PhaseStats};
 use super::models::{CellFlips, ComponentFlips, Elasticity, ParamsInit, RegionForce, Rigidity};
 use super::params::SegmentParams;
 use super::raster::Raster;
+use super::thresholds::Classes;
 use crate::complex::{Complex, Label};
 use crate::dim::Point;
 use std::any::Any;
@@ -339,6 +340,9 @@ pub struct InitContext<'c, 'a, K: Raster> {
     pub params: &'c SegmentParams,
     /// The image's dynamic range `(min, max)`.
     pub range: (f64, f64),
+    /// The histogram split into `params.phases` classes (for
+    /// [`Init::Histogram`](super::params::Init::Histogram); `None` otherwise).
+    pub classes: Option<&'c Classes>,
 }
 
 /// Labels the cells before the evolution starts.

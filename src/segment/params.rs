@@ -51,6 +51,16 @@ pub enum JunctionForce {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Init {
+    /// Cells labelled by their mean against the thresholds that split the
+    /// histogram of the cell means (each cell weighted by its pixels, over
+    /// the image's 0.1–99.9 % range) into `N` classes of least within-class
+    /// variance (multi-level Otsu, exact up to 8 phases; k-means++ beyond;
+    /// see [`thresholds`](super::thresholds)). The default: a few outliers
+    /// neither stretch the bins nor get a class, the classes follow the
+    /// histogram's modes wherever they lie, and cell means are far less
+    /// noisy than pixels (on the four-phase phantoms at σ = 0.2 the pixel
+    /// histogram has no valleys left; the cell means' does).
+    Histogram,
     /// Cells labelled by their mean: two phases bisect the dynamic range,
     /// `N` phases split it into `N` equal intervals.
     Range,
@@ -186,7 +196,7 @@ impl SegmentParams {
             phases,
             edge_length: None,
             max_iterations: 500,
-            init: Init::Range,
+            init: Init::Histogram,
             label_flips: true,
             flip_interval: 1,
             flip_guard: true,
@@ -339,7 +349,7 @@ impl SegmentParams {
             return Err(SegmentError::ChanVeseNeedsTwoPhases(self.phases));
         }
         match &self.init {
-            Init::Range => {}
+            Init::Histogram | Init::Range => {}
             Init::Disks(disks) => {
                 if disks.is_empty() {
                     return Err(SegmentError::Init("at least one disk is needed".into()));

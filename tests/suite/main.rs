@@ -10,6 +10,7 @@ mod dsc3d;
 mod figures;
 mod forces;
 mod generic;
+mod intensity;
 mod prop2d;
 mod seg3d;
 mod segment2d;

@@ -202,6 +202,13 @@ impl<K: Raster> Initialiser<K> for ParamsInit {
         &mut self,
         ctx: &mut InitContext<'_, '_, K>,
     ) -> Result<Vec<Option<f64>>, SegmentError> {
-        initialise(ctx.complex, ctx.image, ctx.params, ctx.cells, ctx.range)
+        initialise(
+            ctx.complex,
+            ctx.image,
+            ctx.params,
+            ctx.cells,
+            ctx.range,
+            ctx.classes,
+        )
     }
 }

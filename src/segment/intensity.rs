@@ -1,0 +1,234 @@
+//! The input's intensity scale: extremes, a robust range, a noise estimate
+//! and a histogram, all equivariant under `I ↦ a·I + b`.
+//!
+//! The segmentation's energy `Σ (I − c)² + ν·length` is only meaningful when
+//! ν is measured in the data's own units: a 12-bit camera image stored as
+//! 16 bits, a CT slice in Hounsfield units and the same image scaled to
+//! `[0, 1]` must give the same labels. Everything the driver needs to make ν
+//! and its thresholds relative to the data is computed here, once.
+
+use super::image::ImageView;
+use super::integrate::CellStats;
+use serde::Serialize;
+
+/// Fraction of the samples left out at each end of the robust range.
+pub const ROBUST_TAIL: f64 = 0.001;
+
+/// Largest number of samples the quantiles and the noise estimate read (an
+/// evenly strided subset of larger inputs).
+const MAX_SAMPLES: usize = 1 << 20;
+
+/// Number of histogram bins between the robust range's ends.
+pub const HISTOGRAM_BINS: usize = 256;
+
+/// Intensity figures of an image or volume, in the units of its samples.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct IntensityStats {
+    /// Smallest sample.
+    pub min: f64,
+    /// Largest sample.
+    pub max: f64,
+    /// The [`ROBUST_TAIL`] quantile: the robust range's lower end.
+    pub low: f64,
+    /// The `1 −` [`ROBUST_TAIL`] quantile: the robust range's upper end.
+    pub high: f64,
+    /// Standard deviation of the noise, estimated from the differences of
+    /// neighbouring samples along x (median absolute difference / (0.6745·√2),
+    /// robust to edges); 0 for noise-free data.
+    pub noise: f64,
+}
+
+impl IntensityStats {
+    /// The figures of `image` (finite samples, at least one).
+    pub fn of(image: &ImageView<'_>) -> Self {
+        let (min, max) = image.range().unwrap_or((0.0, 0.0));
+        let mut sample = strided_sample(image.data);
+        let (mut low, mut high) = (quantile(&mut sample, ROBUST_TAIL), {
+            quantile(&mut sample, 1.0 - ROBUST_TAIL)
+        });
+        if high <= low {
+            // Most samples share one value: fall back on the extremes.
+            (low, high) = (min, max);
+        }
+        IntensityStats {
+            min,
+            max,
+            low,
+            high,
+            noise: noise_sigma(image),
+        }
+    }
+
+    /// The robust range `high − low` (never zero for a non-constant image):
+    /// the intensity scale the length weight is measured against.
+    pub fn scale(&self) -> f64 {
+        let s = self.high - self.low;
+        if s > 0.0 {
+            s
+        } else {
+            (self.max - self.min).max(f64::MIN_POSITIVE)
+        }
+    }
+
+    /// The histogram of `image` over the robust range (samples beyond it
+    /// count in the end bins, so a few outliers cannot stretch the bins).
+    pub fn histogram(&self, image: &ImageView<'_>) -> Histogram {
+        let mut h = Histogram::empty(self.low, self.low + self.scale());
+        for &v in image.data {
+            let v = v as f64;
+            h.add(v, 1.0, v, v * v);
+        }
+        h
+    }
+
+    /// The histogram of the cells' mean intensities over the robust range,
+    /// each cell weighted by its pixels (its sums go to the bin of its mean).
+    /// A cell's mean has the noise of one pixel divided by the square root of
+    /// its pixel count, so the classes of this histogram separate where the
+    /// pixels' histogram is one blur of overlapping noise.
+    pub fn cell_histogram(&self, cells: &[CellStats]) -> Histogram {
+        let mut h = Histogram::empty(self.low, self.low + self.scale());
+        for c in cells {
+            if let Some(m) = c.mean() {
+                h.add(m, c.count as f64, c.sum, c.sum_sq);
+            }
+        }
+        h
+    }
+}
+
+/// Samples of `data`, every k-th so that at most [`MAX_SAMPLES`] are taken.
+fn strided_sample(data: &[f32]) -> Vec<f32> {
+    let stride = data.len().div_ceil(MAX_SAMPLES).max(1);
+    data.iter().step_by(stride).copied().collect()
+}
+
+/// The `q` quantile of `v` (reordered in place; `v` non-empty).
+fn quantile(v: &mut [f32], q: f64) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let k = ((v.len() - 1) as f64 * q).round() as usize;
+    let (_, x, _) = v.select_nth_unstable_by(k, f32::total_cmp);
+    *x as f64
+}
+
+/// Noise standard deviation from the median absolute difference of
+/// neighbouring samples along x (for Gaussian noise on a piecewise-constant
+/// image, `|I(x+1) − I(x)|` away from edges has median `0.6745·√2·σ`).
+fn noise_sigma(image: &ImageView<'_>) -> f64 {
+    let w = image.dims[0];
+    if w < 2 {
+        return 0.0;
+    }
+    let rows = image.data.len() / w;
+    let pairs = rows * (w - 1);
+    let stride = pairs.div_ceil(MAX_SAMPLES).max(1);
+    let mut diffs: Vec<f32> = (0..pairs)
+        .step_by(stride)
+        .map(|i| {
+            let (r, x) = (i / (w - 1), i % (w - 1));
+            let p = r * w + x;
+            (image.data[p + 1] - image.data[p]).abs()
+        })
+        .collect();
+    quantile(&mut diffs, 0.5) / (0.6745 * std::f64::consts::SQRT_2)
+}
+
+/// Counts, sums and sums of squares of the samples per bin: within-class
+/// variances of classes made of whole bins are exact.
+#[derive(Clone, Debug)]
+pub struct Histogram {
+    /// Lower edge of the first bin.
+    pub low: f64,
+    /// Bin width.
+    pub width: f64,
+    /// Samples per bin.
+    pub count: Vec<f64>,
+    /// Sum of the samples per bin.
+    pub sum: Vec<f64>,
+    /// Sum of the squared samples per bin.
+    pub sum_sq: Vec<f64>,
+}
+
+impl Histogram {
+    /// [`HISTOGRAM_BINS`] empty bins over `[low, high]` (`high > low`).
+    pub fn empty(low: f64, high: f64) -> Self {
+        let bins = HISTOGRAM_BINS;
+        Histogram {
+            low,
+            width: (high - low) / bins as f64,
+            count: vec![0.0; bins],
+            sum: vec![0.0; bins],
+            sum_sq: vec![0.0; bins],
+        }
+    }
+
+    /// The histogram of `data` over `[low, high]` (`high > low`).
+    pub fn new(data: &[f32], low: f64, high: f64) -> Self {
+        let mut h = Self::empty(low, high);
+        for &v in data {
+            let v = v as f64;
+            h.add(v, 1.0, v, v * v);
+        }
+        h
+    }
+
+    /// Adds `count` samples with the given sums to the bin of `at`; values
+    /// outside the range count in the end bins.
+    pub fn add(&mut self, at: f64, count: f64, sum: f64, sum_sq: f64) {
+        let bins = self.count.len();
+        let b = (((at - self.low) / self.width).floor().max(0.0) as usize).min(bins - 1);
+        self.count[b] += count;
+        self.sum[b] += sum;
+        self.sum_sq[b] += sum_sq;
+    }
+
+    /// Number of bins.
+    pub fn bins(&self) -> usize {
+        self.count.len()
+    }
+
+    /// The intensity at the upper edge of bin `b`.
+    pub fn upper_edge(&self, b: usize) -> f64 {
+        self.low + (b + 1) as f64 * self.width
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stats_follow_an_affine_map() {
+        let data: Vec<f32> = (0..10_000)
+            .map(|i| ((i * 7919) % 1000) as f32 / 1000.0)
+            .collect();
+        let view = ImageView::new_2d(100, 100, &data).unwrap();
+        let s = IntensityStats::of(&view);
+        let mapped: Vec<f32> = data.iter().map(|&v| 300.0 * v - 20.0).collect();
+        let view2 = ImageView::new_2d(100, 100, &mapped).unwrap();
+        let t = IntensityStats::of(&view2);
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-3 * b.abs().max(1.0);
+        assert!(close(t.low, 300.0 * s.low - 20.0), "{t:?} {s:?}");
+        assert!(close(t.high, 300.0 * s.high - 20.0));
+        assert!(close(t.scale(), 300.0 * s.scale()));
+        assert!(close(t.noise, 300.0 * s.noise));
+    }
+
+    #[test]
+    fn outliers_do_not_stretch_the_robust_range() {
+        let mut data = vec![0.25f32; 100 * 100];
+        for (i, v) in data.iter_mut().enumerate() {
+            if (i % 100) >= 50 {
+                *v = 0.5;
+            }
+        }
+        data[17] = 60.0; // one hot pixel
+        let view = ImageView::new_2d(100, 100, &data).unwrap();
+        let s = IntensityStats::of(&view);
+        assert_eq!(s.max, 60.0);
+        assert_eq!((s.low, s.high), (0.25, 0.5));
+        assert_eq!(s.noise, 0.0);
+    }
+}

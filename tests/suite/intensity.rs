@@ -1,0 +1,149 @@
+//! The labels do not depend on how the intensities are encoded: the
+//! phantoms as 8-bit PNG, 16-bit PNG with 64 levels, 16-bit PNG offset by
+//! 20000, float32 TIFF in shifted units and negated float32 TIFF give the same
+//! segmentation (mean Dice ≥ 0.99 between runs), in 2D and in 3D.
+
+use dsc_seg::io::{Image2, SampleType};
+use dsc_seg::phantom::{shapes3d, Phantom2Kind};
+use dsc_seg::pipeline::mean_dice;
+use dsc_seg::segment::{ImageView, SegmentParams, Segmentation2, Segmentation3};
+use std::path::Path;
+
+fn labels_2d(image: &Image2, phases: usize) -> Vec<u8> {
+    let view = ImageView::new_2d(image.width(), image.height(), image.data()).unwrap();
+    let mut seg = Segmentation2::new(view, SegmentParams::new(phases)).unwrap();
+    seg.run(|_| {});
+    seg.label_image()
+}
+
+fn save_u16(path: &Path, size: usize, data: &[u16]) {
+    image::ImageBuffer::<image::Luma<u16>, _>::from_raw(size as u32, size as u32, data.to_vec())
+        .unwrap()
+        .save(path)
+        .unwrap();
+}
+
+fn save_f32_tiff(path: &Path, size: usize, data: &[f32]) {
+    let file = std::fs::File::create(path).unwrap();
+    tiff::encoder::TiffEncoder::new(file)
+        .unwrap()
+        .write_image::<tiff::encoder::colortype::Gray32Float>(size as u32, size as u32, data)
+        .unwrap();
+}
+
+/// Phase k of `labels` becomes phase N−1−k (the order by mean of a negated image).
+fn reversed(labels: &[u8], phases: usize) -> Vec<u8> {
+    labels.iter().map(|&l| (phases - 1) as u8 - l).collect()
+}
+
+#[test]
+fn encodings_of_the_2d_phantoms_give_the_same_labels() {
+    let dir = tempfile::tempdir().unwrap();
+    for kind in [Phantom2Kind::TwoPhase, Phantom2Kind::FourPhase] {
+        let (size, n) = (256, kind.phases());
+        let ph = kind.generate(size, 0.2, 3);
+        let bytes = ph.image_u8();
+        let p8 = dir.path().join("p8.png");
+        dsc_seg::io::save_gray8_png(&p8, size, size, &bytes).unwrap();
+        let base = labels_2d(&Image2::load(&p8).unwrap(), n);
+        assert!(mean_dice(&base, &ph.truth, n) > 0.95, "{kind:?}");
+
+        let levels64: Vec<u16> = bytes
+            .iter()
+            .map(|&b| (b as f64 * 63.0 / 255.0).round() as u16)
+            .collect();
+        let offset: Vec<u16> = bytes.iter().map(|&b| 20_000 + b as u16).collect();
+        let shifted: Vec<f32> = bytes.iter().map(|&b| b as f32 * 4.0 - 1000.0).collect();
+        let negated: Vec<f32> = bytes.iter().map(|&b| -(b as f32)).collect();
+        let p64 = dir.path().join("p64.png");
+        let poff = dir.path().join("poff.png");
+        let pf = dir.path().join("pf.tif");
+        let pneg = dir.path().join("pneg.tif");
+        save_u16(&p64, size, &levels64);
+        save_u16(&poff, size, &offset);
+        save_f32_tiff(&pf, size, &shifted);
+        save_f32_tiff(&pneg, size, &negated);
+        for (path, ty, negate) in [
+            (&p64, SampleType::Uint16, false),
+            (&poff, SampleType::Uint16, false),
+            (&pf, SampleType::Float, false),
+            (&pneg, SampleType::Float, true),
+        ] {
+            let image = Image2::load(path).unwrap();
+            assert_eq!(image.sample_type(), ty);
+            let mut labels = labels_2d(&image, n);
+            if negate {
+                labels = reversed(&labels, n);
+            }
+            let dice = mean_dice(&labels, &base, n);
+            assert!(dice >= 0.99, "{kind:?} {}: Dice {dice}", path.display());
+        }
+    }
+}
+
+#[test]
+fn float_tiff_keeps_negative_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("hu.tif");
+    save_f32_tiff(&p, 2, &[-1000.0, -1.5, 0.0, 3000.0]);
+    let image = Image2::load(&p).unwrap();
+    assert_eq!(image.data(), &[-1000.0, -1.5, 0.0, 3000.0]);
+    assert_eq!(image.sample_type().to_original(-1.5), -1.5);
+}
+
+fn labels_3d(data: &[f32], n: usize) -> Vec<u8> {
+    let view = ImageView::new_3d([n, n, n], data).unwrap();
+    let mut seg = Segmentation3::new(view, SegmentParams::new_3d(2)).unwrap();
+    seg.run(|_| {});
+    seg.label_image()
+}
+
+#[test]
+fn encodings_of_a_3d_phantom_give_the_same_labels() {
+    let n = 48;
+    let ph = shapes3d::torus(n, 0.1, 2);
+    let bytes: Vec<u8> = ph
+        .image
+        .iter()
+        .map(|&v| (v * 255.0).round() as u8)
+        .collect();
+    let eight: Vec<f32> = bytes.iter().map(|&b| b as f32 / 255.0).collect();
+    let base = labels_3d(&eight, n);
+    assert!(mean_dice(&base, &ph.truth, 2) > 0.97);
+    let encodings: [(&str, Vec<f32>, bool); 4] = [
+        (
+            "16-bit, 64 levels",
+            bytes
+                .iter()
+                .map(|&b| (b as f32 * 63.0 / 255.0).round() / 65535.0)
+                .collect(),
+            false,
+        ),
+        (
+            "16-bit + 20000",
+            bytes
+                .iter()
+                .map(|&b| (20_000.0 + b as f32) / 65535.0)
+                .collect(),
+            false,
+        ),
+        (
+            "float, shifted",
+            bytes.iter().map(|&b| b as f32 * 4.0 - 1000.0).collect(),
+            false,
+        ),
+        (
+            "negated",
+            bytes.iter().map(|&b| -(b as f32)).collect(),
+            true,
+        ),
+    ];
+    for (what, data, negate) in encodings {
+        let mut labels = labels_3d(&data, n);
+        if negate {
+            labels = reversed(&labels, 2);
+        }
+        let dice = mean_dice(&labels, &base, 2);
+        assert!(dice >= 0.99, "{what}: Dice {dice}");
+    }
+}
