@@ -15,6 +15,7 @@
 //! This module depends on no other module of the crate.
 
 pub mod blur;
+pub mod hard2d;
 pub mod noise;
 pub mod shapes2d;
 pub mod shapes3d;

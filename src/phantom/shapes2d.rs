@@ -17,13 +17,13 @@ pub const FIG5_LEVELS: [f64; 3] = [0.2, 0.5, 0.8];
 pub const FIG6_LEVELS: [f64; 3] = [0.2, 0.8, 0.5];
 
 #[inline]
-fn sq(v: f64) -> f64 {
+pub(super) fn sq(v: f64) -> f64 {
     v * v
 }
 
 /// Evaluates `f(x, y)` at the normalised centre of every pixel of an
 /// `n × n` grid, row-major.
-fn label_map(n: usize, f: impl Fn(f64, f64) -> u8) -> Vec<u8> {
+pub(super) fn label_map(n: usize, f: impl Fn(f64, f64) -> u8) -> Vec<u8> {
     let c: Vec<f64> = (0..n).map(|i| (i as f64 + 0.5) / n as f64).collect();
     let mut out = Vec::with_capacity(n * n);
     for &y in &c {
@@ -390,11 +390,21 @@ pub enum Phantom2Kind {
     Fig5,
     /// [`fig6`]: three phases, two merging initial regions.
     Fig6,
+    /// [`hard2d::three_close`](super::hard2d::three_close): means 0.35 / 0.5 / 0.65.
+    ThreeClose,
+    /// [`hard2d::four_close`](super::hard2d::four_close): means 0.1 apart.
+    FourClose,
+    /// [`two_phase`] with 0.5 % salt-and-pepper specks.
+    TwoPhaseSpecks,
+    /// [`four_phase`] with 0.5 % salt-and-pepper specks.
+    FourPhaseSpecks,
+    /// [`hard2d::disks`](super::hard2d::disks) with 2 to 6 phases (`disks2` … `disks6`).
+    Disks(u8),
 }
 
 impl Phantom2Kind {
     /// Every kind, in order.
-    pub const ALL: [Phantom2Kind; 7] = [
+    pub const ALL: [Phantom2Kind; 16] = [
         Self::TwoPhase,
         Self::FourPhase,
         Self::Fig2,
@@ -402,6 +412,15 @@ impl Phantom2Kind {
         Self::Fig4,
         Self::Fig5,
         Self::Fig6,
+        Self::ThreeClose,
+        Self::FourClose,
+        Self::TwoPhaseSpecks,
+        Self::FourPhaseSpecks,
+        Self::Disks(2),
+        Self::Disks(3),
+        Self::Disks(4),
+        Self::Disks(5),
+        Self::Disks(6),
     ];
 
     /// The command-line name (`two_phase`, `four_phase`, `fig2`, ...).
@@ -414,6 +433,15 @@ impl Phantom2Kind {
             Self::Fig4 => "fig4",
             Self::Fig5 => "fig5",
             Self::Fig6 => "fig6",
+            Self::ThreeClose => "three_close",
+            Self::FourClose => "four_close",
+            Self::TwoPhaseSpecks => "two_phase_specks",
+            Self::FourPhaseSpecks => "four_phase_specks",
+            Self::Disks(2) => "disks2",
+            Self::Disks(3) => "disks3",
+            Self::Disks(4) => "disks4",
+            Self::Disks(5) => "disks5",
+            Self::Disks(_) => "disks6",
         }
     }
 
@@ -426,15 +454,22 @@ impl Phantom2Kind {
     /// Number of phases of the phantom.
     pub fn phases(self) -> usize {
         match self {
-            Self::TwoPhase | Self::Fig2 | Self::Fig3 => 2,
-            Self::FourPhase | Self::Fig4 => 4,
-            Self::Fig5 | Self::Fig6 => 3,
+            Self::TwoPhase | Self::Fig2 | Self::Fig3 | Self::TwoPhaseSpecks => 2,
+            Self::FourPhase | Self::Fig4 | Self::FourClose | Self::FourPhaseSpecks => 4,
+            Self::Fig5 | Self::Fig6 | Self::ThreeClose => 3,
+            Self::Disks(n) => n.clamp(2, 6) as usize,
         }
     }
 
     /// Generates the phantom (`size × size`, noise `noise_sigma`, RNG `seed`).
     pub fn generate(self, size: usize, noise_sigma: f64, seed: u64) -> Phantom2 {
+        use super::hard2d;
         let f = match self {
+            Self::ThreeClose => hard2d::three_close,
+            Self::FourClose => hard2d::four_close,
+            Self::TwoPhaseSpecks => hard2d::two_phase_specks,
+            Self::FourPhaseSpecks => hard2d::four_phase_specks,
+            Self::Disks(_) => return hard2d::disks(size, self.phases(), noise_sigma, seed),
             Self::TwoPhase => two_phase,
             Self::FourPhase => four_phase,
             Self::Fig2 => fig2,
