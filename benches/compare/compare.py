@@ -21,6 +21,8 @@ usage (from the repository root, after `cargo build --release` and
   python3 benches/compare/compare.py --out OUT            # the README's tables
   python3 benches/compare/compare.py --out OUT --only 2d --sizes 256 --sigmas 0.2 --repeat 1
   python3 benches/compare/compare.py --out OUT --only 3d --sizes3d 64 --methods3d mbo multi_otsu
+  python3 benches/compare/compare.py --out OUT --only 2d --sizes 256 512 --sigmas 0.1 0.25 \
+      --phantoms three_close four_close two_phase_specks four_phase_specks
 """
 from __future__ import annotations
 
@@ -39,6 +41,8 @@ import peers  # noqa: E402
 import score  # noqa: E402
 
 PHANTOMS_2D = {"two_phase": 2, "four_phase": 4}
+# Harder phantoms (--phantoms): close means, salt-and-pepper specks.
+PHANTOMS_2D_HARD = {"three_close": 3, "four_close": 4, "two_phase_specks": 2, "four_phase_specks": 4}
 PHANTOMS_3D = ["two_balls", "torus", "hollow_sphere"]
 # The 2D cases without --sizes/--sigmas: 256² and 512² at both noise levels,
 # 1024² at the higher one.
@@ -197,6 +201,8 @@ def parse_args() -> argparse.Namespace:
     ap.add_argument("--sizes3d", type=int, nargs="+", default=[64, 128])
     ap.add_argument("--sigmas3d", type=float, nargs="+", default=[0.1, 0.2])
     ap.add_argument("--seed", type=int, default=1, help="noise seed of every phantom")
+    ap.add_argument("--phantoms", nargs="+", choices=list(PHANTOMS_2D) + list(PHANTOMS_2D_HARD),
+                    default=list(PHANTOMS_2D), help="2D phantoms (default: two_phase four_phase)")
     ap.add_argument("--methods", nargs="+", choices=PEER_ORDER, default=PEER_ORDER, help="2D peers")
     ap.add_argument("--methods3d", nargs="+", choices=PEER_ORDER, default=PEER_ORDER,
                     help="3D peers (chan_vese is 2D only; morph_chan_vese is the slowest)")
@@ -217,7 +223,9 @@ def main() -> None:
     results = {"two_d": [], "three_d": [], "memory": []}
     if a.only != "3d":
         cases = ([(n, s) for n in a.sizes for s in (a.sigmas or [0.1, 0.2])] if a.sizes else DEFAULT_CASES_2D)
-        for name, phases in PHANTOMS_2D.items():
+        known = {**PHANTOMS_2D, **PHANTOMS_2D_HARD}
+        for name in a.phantoms:
+            phases = known[name]
             for size, noise in cases:
                 row = case(a.bin, "2d", name, size, noise, phases, a.seed, a.out, a.repeat, a.methods)
                 results["two_d"].append(row)

@@ -201,6 +201,7 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
         quiet: a.quiet,
     };
     let report = run_segment(&job)?;
+    print_warnings(&report);
     if !a.quiet {
         print_summary(&report, "cells", &job.out);
     }
@@ -236,6 +237,7 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
         quiet: a.quiet,
     };
     let report = run_segment3d(&job)?;
+    print_warnings(&report);
     if !a.quiet {
         print_summary(&report, "tets", &job.out);
     }
@@ -291,8 +293,18 @@ fn task_is_3d(task: &Task) -> bool {
 }
 
 /// One line on stderr: how the run ended and where the outputs are.
+/// Every warning of the run on stderr, quiet or not: a result with a lost
+/// phase must not pass for a good one.
+fn print_warnings(report: &dsc_seg::segment::SegmentReport) {
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
+}
+
 fn print_summary(report: &dsc_seg::segment::SegmentReport, cells: &str, out: &std::path::Path) {
-    let ending = if report.converged {
+    let ending = if report.converged && !report.warnings.is_empty() {
+        "converged with lost phases (see the warnings)"
+    } else if report.converged {
         "converged"
     } else {
         "stopped at the iteration cap"

@@ -15,6 +15,7 @@
 //! - `force_stage`: an iteration's force terms summed, its step and the
 //!   destinations of the deformation;
 //! - [`flips`]: label flips (mean rule, pixel-dominant rule);
+//! - [`reseed`]: phases that empty or duplicate another, found and re-seeded;
 //! - [`model`]: the extension points ([`ForceTerm`], [`LabelRule`],
 //!   [`Initialiser`], [`Models`]) through which a user supplies the evolution;
 //! - [`models`]: the paper's terms and rules written against them, and
@@ -43,6 +44,7 @@ pub mod models;
 pub mod output;
 pub mod params;
 pub mod raster;
+pub mod reseed;
 #[cfg(feature = "tetgen")]
 pub mod tetgen_init;
 pub mod thresholds;

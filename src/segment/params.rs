@@ -126,6 +126,12 @@ pub struct SegmentParams {
     /// the 3D default.
     #[serde(default = "one")]
     pub flip_interval: usize,
+    /// Whether a phase that empties or duplicates another's mean is re-seeded
+    /// by splitting the phase of largest variance (see
+    /// [`reseed`](super::reseed)); on by default. Either way a phase still
+    /// lost at the end is reported in [`SegmentReport::warnings`](super::SegmentReport::warnings).
+    #[serde(default = "yes")]
+    pub reseed: bool,
     /// Whether flips must also lower the Mumford–Shah energy (see [`crate::segment::flips`]).
     pub flip_guard: bool,
     /// Whether a pixel may be relabelled by a cell flip only once per run
@@ -199,6 +205,7 @@ impl SegmentParams {
             init: Init::Histogram,
             label_flips: true,
             flip_interval: 1,
+            reseed: true,
             flip_guard: true,
             flip_once: false,
             force: ForceModel::Normalised,
@@ -425,6 +432,10 @@ impl SegmentParams {
 
 fn one() -> usize {
     1
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// The default average edge length for `phases` phases: `min(W, H) / 64 ·

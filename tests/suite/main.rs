@@ -12,6 +12,7 @@ mod forces;
 mod generic;
 mod intensity;
 mod prop2d;
+mod reseed;
 mod seg3d;
 mod segment2d;
 mod sizing;

@@ -1,0 +1,199 @@
+//! Phases the evolution loses: detection, and a new start for them.
+//!
+//! With `N` phases asked for, the evolution can end with a phase that covers
+//! no pixel, or with two phases whose means coincide (both holding a mix of
+//! the same two true phases, e.g. 0.390 and 0.391 on an image with means 0.35
+//! and 0.5). Either way the result has fewer than `N` distinct phases while
+//! the stopping rule sees nothing wrong. [`lost_phases`] finds them; the driver
+//! then merges a duplicate into its twin and re-seeds the lost label by
+//! splitting the phase with the largest within-phase variance
+//! ([`split_worst_phase`]) at the least-variance threshold of its cell
+//! means, and warns when it cannot.
+
+use super::integrate::{CellStats, PhaseStats};
+use super::intensity::Histogram;
+use super::raster::Raster;
+use super::thresholds::split_histogram;
+use crate::complex::{CellId, Complex, Label};
+use serde::Serialize;
+
+/// A phase the run has lost.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LostPhase {
+    /// The phase covers no pixel.
+    Empty(Label),
+    /// The phase's mean lies within the tolerance of its twin's (the twin
+    /// has at least as many pixels).
+    Duplicate {
+        /// The smaller of the two phases.
+        phase: Label,
+        /// The phase it duplicates.
+        twin: Label,
+    },
+}
+
+impl LostPhase {
+    /// The label that is lost.
+    pub fn label(&self) -> Label {
+        match *self {
+            LostPhase::Empty(l) | LostPhase::Duplicate { phase: l, .. } => l,
+        }
+    }
+
+    /// One line for a user, with the means in the units of the image.
+    pub fn describe(&self, phases: &PhaseStats) -> String {
+        match *self {
+            LostPhase::Empty(l) => format!("phase label {l} covers no pixel"),
+            LostPhase::Duplicate { phase, twin } => format!(
+                "phase labels {phase} and {twin} have the same mean ({:.6} and {:.6}) within the noise",
+                phases.mean_of(phase).unwrap_or(f64::NAN),
+                phases.mean_of(twin).unwrap_or(f64::NAN)
+            ),
+        }
+    }
+}
+
+/// Whether [`lost_phases`] would find any, without allocating (the driver
+/// asks on every flip iteration).
+pub fn any_lost(phases: &PhaseStats, tolerance: f64) -> bool {
+    let n = phases.count.len();
+    (0..n).any(|a| {
+        phases.count[a] == 0
+            || (a + 1..n).any(|b| {
+                phases.count[b] > 0
+                    && matches!((phases.mean[a], phases.mean[b]),
+                        (Some(ma), Some(mb)) if (ma - mb).abs() < tolerance)
+            })
+    })
+}
+
+/// The empty phases, then the duplicates: present phases whose means
+/// differ by less than `tolerance` from the next one up (each phase listed
+/// at most once).
+pub fn lost_phases(phases: &PhaseStats, tolerance: f64) -> Vec<LostPhase> {
+    let mut lost: Vec<LostPhase> = (0..phases.count.len())
+        .filter(|&k| phases.count[k] == 0)
+        .map(|k| LostPhase::Empty(k as Label))
+        .collect();
+    let mut present: Vec<(f64, usize)> = (0..phases.count.len())
+        .filter(|&k| phases.count[k] > 0)
+        .filter_map(|k| phases.mean[k].map(|m| (m, k)))
+        .collect();
+    present.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut i = 0;
+    while i + 1 < present.len() {
+        let ((ma, a), (mb, b)) = (present[i], present[i + 1]);
+        if mb - ma < tolerance {
+            let (phase, twin) = if phases.count[a] <= phases.count[b] {
+                (a, b)
+            } else {
+                (b, a)
+            };
+            lost.push(LostPhase::Duplicate {
+                phase: phase as Label,
+                twin: twin as Label,
+            });
+            i += 2;
+        } else {
+            i += 1;
+        }
+    }
+    lost
+}
+
+/// Gives every cell of phase `from` the label `to`.
+pub fn merge_phase<K: Raster>(complex: &mut Complex<K>, from: Label, to: Label) {
+    let changes: Vec<(CellId, Label)> = complex
+        .cell_ids()
+        .filter(|&c| complex.label(c) == from)
+        .map(|c| (c, to))
+        .collect();
+    complex.set_labels(&changes);
+}
+
+/// Splits the phase with the largest within-phase sum of squared deviations
+/// in two at the least-variance threshold of its cells' means, and gives the
+/// cells above the threshold the (empty) label `into`. Returns false when no
+/// phase can be split (every phase's cells share one mean).
+pub fn split_worst_phase<K: Raster>(
+    complex: &mut Complex<K>,
+    cells: &[CellStats],
+    phases: &PhaseStats,
+    into: Label,
+    (low, high): (f64, f64),
+) -> bool {
+    let n = phases.count.len();
+    let mut sse = vec![0.0; n];
+    for c in complex.cell_ids() {
+        let l = complex.label(c) as usize;
+        if l < n && l != into as usize {
+            if let Some(m) = phases.mean[l] {
+                sse[l] += cells[c.index()].sse(m);
+            }
+        }
+    }
+    let mut order: Vec<usize> = (0..n).filter(|&k| sse[k] > 0.0).collect();
+    order.sort_by(|&a, &b| sse[b].total_cmp(&sse[a]));
+    for worst in order {
+        let mut hist = Histogram::empty(low, high);
+        for c in complex.cell_ids() {
+            if complex.label(c) as usize == worst {
+                let s = &cells[c.index()];
+                if let Some(m) = s.mean() {
+                    hist.add(m, s.count as f64, s.sum, s.sum_sq);
+                }
+            }
+        }
+        let classes = split_histogram(&hist, 2);
+        if classes.counts.contains(&0.0) {
+            continue;
+        }
+        let t = classes.thresholds[0];
+        let changes: Vec<(CellId, Label)> = complex
+            .cell_ids()
+            .filter(|&c| complex.label(c) as usize == worst)
+            .filter(|&c| cells[c.index()].mean().is_some_and(|m| m >= t))
+            .map(|c| (c, into))
+            .collect();
+        if !changes.is_empty() {
+            complex.set_labels(&changes);
+            return true;
+        }
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stats(count: &[u64], mean: &[f64]) -> PhaseStats {
+        PhaseStats {
+            count: count.to_vec(),
+            sum: count
+                .iter()
+                .zip(mean)
+                .map(|(&c, &m)| c as f64 * m)
+                .collect(),
+            mean: mean.iter().map(|&m| Some(m)).collect(),
+        }
+    }
+
+    #[test]
+    fn empty_and_duplicate_phases_are_found() {
+        let p = stats(&[100, 0, 50, 70], &[0.39, 0.2, 0.391, 0.7]);
+        assert_eq!(
+            lost_phases(&p, 0.01),
+            vec![
+                LostPhase::Empty(1),
+                LostPhase::Duplicate { phase: 2, twin: 0 }
+            ]
+        );
+        assert!(any_lost(&p, 0.01));
+        let distinct = stats(&[10, 10, 10], &[0.35, 0.45, 0.55]);
+        assert!(lost_phases(&distinct, 0.05).is_empty());
+        assert!(!any_lost(&distinct, 0.05));
+        assert!(any_lost(&distinct, 0.2));
+    }
+}

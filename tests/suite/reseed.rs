@@ -1,0 +1,54 @@
+//! Phases that empty or duplicate another are re-seeded, or reported.
+
+use dsc_seg::phantom::Phantom2Kind;
+use dsc_seg::pipeline::mean_dice;
+use dsc_seg::segment::{ImageView, Init, SegmentParams, Segmentation2};
+
+/// Three phases with close means started from the range split: one phase
+/// is lost on the way and re-seeded, and the run ends with three distinct
+/// phases that match the truth.
+#[test]
+fn a_lost_phase_of_close_means_is_reseeded() {
+    let ph = Phantom2Kind::ThreeClose.generate(256, 0.1, 1);
+    let view = ImageView::new_2d(ph.width, ph.height, &ph.image).unwrap();
+    let mut params = SegmentParams::new(3);
+    params.init = Init::Range;
+    let mut seg = Segmentation2::new(view, params.clone()).unwrap();
+    let report = seg.run(|_| {});
+    assert!(report.reseeds >= 1, "{report:?}");
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    assert!(seg.lost_phases().is_empty());
+    let dice = mean_dice(&seg.label_image(), &ph.truth, 3);
+    assert!(dice > 0.98, "Dice {dice}");
+
+    // Without re-seeding the same start loses the phase for good, and says so.
+    params.reseed = false;
+    let mut seg = Segmentation2::new(view, params).unwrap();
+    let report = seg.run(|_| {});
+    assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+    assert!(report.warnings[0].contains("fewer than the 3 distinct phases"));
+}
+
+/// More phases asked for than the image holds: the extra phase cannot be
+/// kept, and the report says so instead of a silent result.
+#[test]
+fn too_many_phases_give_a_warning() {
+    let (w, h) = (96, 96);
+    let data: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            let inside = (x - 48.0).powi(2) + (y - 48.0).powi(2) < 400.0;
+            // deterministic pseudo-noise
+            let n = (((i * 7919) % 1000) as f32 / 1000.0 - 0.5) * 0.3;
+            if inside {
+                0.7 + n
+            } else {
+                0.3 + n
+            }
+        })
+        .collect();
+    let view = ImageView::new_2d(w, h, &data).unwrap();
+    let mut seg = Segmentation2::new(view, SegmentParams::new(4)).unwrap();
+    let report = seg.run(|_| {});
+    assert!(!report.warnings.is_empty(), "{report:?}");
+}
