@@ -6,7 +6,7 @@ segments each with `dsc-seg segment --phases K` / `dsc-seg segment3d` (all
 other options at their defaults) and with every peer of `peers.py` that
 handles its phase count and dimension, and scores every result against the
 ground truth with `score.py` (Hungarian matching, Dice per phase). Prints
-Markdown tables and writes OUT/results.json.
+Markdown tables and writes OUT/results.json (after every case).
 
 Times are the segmentation alone, without reading or writing files, for
 dsc-seg (report.json `times.segment`) and the peers alike; each is the
@@ -217,6 +217,13 @@ def parse_args() -> argparse.Namespace:
     return a
 
 
+def save(results: dict, out: str) -> None:
+    """Writes OUT/results.json (after every case, so a long run that is
+    stopped keeps what it measured)."""
+    with open(os.path.join(out, "results.json"), "w") as f:
+        json.dump(results, f, indent=1)
+
+
 def main() -> None:
     a = parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -229,8 +236,9 @@ def main() -> None:
             for size, noise in cases:
                 row = case(a.bin, "2d", name, size, noise, phases, a.seed, a.out, a.repeat, a.methods)
                 results["two_d"].append(row)
+                save(results, a.out)
                 print(f"{row['image']}: dsc-seg {cell(row['dsc-seg'])}", file=sys.stderr, flush=True)
-        methods = [m for m in PEER_ORDER if m in a.methods]
+        methods = [m for m in PEER_ORDER if any(m in r for r in results["two_d"])]
         print("## 2D\n\n" + summary_table(results["two_d"]) + "\n\n" + full_table(results["two_d"], methods) + "\n")
     if a.only != "2d":
         for size in a.sizes3d:
@@ -238,9 +246,10 @@ def main() -> None:
                 for name in PHANTOMS_3D:
                     row = case(a.bin, "3d", name, size, noise, 2, a.seed, a.out, a.repeat3d, a.methods3d)
                     results["three_d"].append(row)
+                    save(results, a.out)
                     print(f"{row['image']}: dsc-seg {cell(row['dsc-seg'])}", file=sys.stderr, flush=True)
-        methods = [m for m in PEER_ORDER if m in a.methods3d]
         rows = results["three_d"]
+        methods = [m for m in PEER_ORDER if any(m in r for r in rows)]
         print("## 3D\n\n" + full_table(rows, methods) + "\n")
         for method in ["dsc-seg"] + methods:
             dice = [r[method]["mean_dice"] for r in rows if method in r]
@@ -250,8 +259,7 @@ def main() -> None:
     if a.memory:
         table, results["memory"] = memory_table(a.bin, a.out, a.memory)
         print("## Peak memory\n\n" + table + "\n")
-    with open(os.path.join(a.out, "results.json"), "w") as f:
-        json.dump(results, f, indent=1)
+    save(results, a.out)
 
 
 if __name__ == "__main__":
