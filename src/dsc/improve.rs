@@ -214,7 +214,7 @@ impl<K: Connectivity> Complex<K> {
     /// [`improve_near`](Self::improve_near) with a workspace kept across
     /// calls about this complex: its memo remembers what the improvement
     /// verified (see [`ImproveMemo`]), and its buffers are reused.
-    pub fn improve_near_with(
+    pub(crate) fn improve_near_with(
         &mut self,
         seeds: &[VertexId],
         params: &DscParams,
@@ -423,7 +423,7 @@ impl<K: Connectivity> Complex<K> {
     }
 
     /// [`remove_degenerate`](Self::remove_degenerate) over the given cells.
-    pub fn remove_degenerate_in(
+    pub(crate) fn remove_degenerate_in(
         &mut self,
         cells: &[CellId],
         params: &DscParams,

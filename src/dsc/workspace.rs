@@ -11,13 +11,12 @@ use crate::complex::{CellId, VertexId};
 use crate::dim::Dim;
 use crate::ops::{ImproveMemo, SmoothScratch};
 
-/// What [`Complex::deform_with`](crate::complex::Complex::deform_with) and
-/// [`Complex::improve_near_with`](crate::complex::Complex::improve_near_with)
-/// keep between calls: the improvement memo ([`ImproveMemo`]) and scratch
-/// buffers, whose contents never outlive a call. `deform_with` starts by
-/// forgetting the memo, so any complex may use the workspace there; calls
-/// of `improve_near_with` in a row must be about one complex (the memo's
-/// verdicts are about its cells and vertices).
+/// What [`Complex::deform_with`](crate::complex::Complex::deform_with) (and,
+/// inside the crate, the improvement it runs) keeps between calls: the
+/// improvement memo ([`ImproveMemo`]) and scratch buffers, whose contents
+/// never outlive a call. `deform_with` starts by forgetting the memo, so any
+/// complex may use the workspace there; improvement calls in a row must be
+/// about one complex (the memo's verdicts are about its cells and vertices).
 #[derive(Debug)]
 pub struct DscWorkspace<K: Dim> {
     pub(super) memo: ImproveMemo,

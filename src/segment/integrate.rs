@@ -414,7 +414,7 @@ fn accumulate((mut sum, mut sum_sq): (f64, f64), values: &[f32]) -> (f64, f64) {
 
 /// Scratch space of [`cell_stats_pair`]: the two cells' row spans.
 #[derive(Clone, Debug, Default)]
-pub struct PairScratch(Vec<(usize, usize)>, Vec<(usize, usize)>);
+pub(crate) struct PairScratch(Vec<(usize, usize)>, Vec<(usize, usize)>);
 
 /// The statistics of two cells, each bit for bit what [`cell_stats`] gives.
 ///
@@ -423,7 +423,7 @@ pub struct PairScratch(Vec<(usize, usize)>, Vec<(usize, usize)>);
 /// Here the two cells' rows are summed side by side, row `k` of one with
 /// row `k` of the other: two independent chains keep the adder busy, each
 /// cell's pixels still in its own order.
-pub fn cell_stats_pair<K: Raster>(
+pub(crate) fn cell_stats_pair<K: Raster>(
     image: &ImageView<'_>,
     a: &[K::Point],
     b: &[K::Point],
