@@ -464,7 +464,7 @@ fn append_f64(v: &mut Vec<f64>, page: tiff::decoder::DecodingResult) -> bool {
 /// Maps values linearly so that the finite minimum becomes 0 and the maximum
 /// 1; constant data becomes 0, NaN becomes 0. `None` when no value is finite:
 /// such data holds no image, and all zeros would pass it off as a constant one.
-fn min_max_normalise(v: &[f64]) -> Option<(Vec<f32>, IntensityMap)> {
+pub fn min_max_normalise(v: &[f64]) -> Option<(Vec<f32>, IntensityMap)> {
     let (lo, hi) = v
         .iter()
         .filter(|s| s.is_finite())

@@ -1,0 +1,159 @@
+"""Multiphase segmentation of NumPy images and volumes with the deformable
+simplicial complex (DSC).
+
+>>> import dsc_seg
+>>> image, truth = dsc_seg.phantom("two_phase", size=128)
+>>> result = dsc_seg.segment(image, phases=2)
+>>> result.labels.shape
+(128, 128)
+
+``segment`` runs the same code as the ``dsc-seg segment`` / ``segment3d``
+command line: its keywords are the command line's options with ``_`` for
+``-`` (``edge_length=4`` is ``--edge-length 4``), and its labels are those
+the command line writes for the same samples.
+"""
+
+from __future__ import annotations
+
+import json
+from functools import cached_property
+from os import PathLike
+from typing import Any, Union
+
+import numpy as np
+
+from . import _native
+
+__all__ = ["segment", "phantom", "Segmentation"]
+__version__ = _native.__version__
+
+
+def _option_args(options: dict[str, Any]) -> list[str]:
+    """Keywords as command-line arguments: ``True`` is a flag, ``False`` and
+    ``None`` leave the option out, a sequence of numbers is one
+    comma-separated value (``spacing=(1, 1, 2)``), a list of sequences or
+    strings repeats the option (``disk=[(40, 40, 10), (90, 60, 8, 2)]``)."""
+    args: list[str] = []
+    for key, value in options.items():
+        flag = "--" + key.replace("_", "-")
+        if value is None or value is False:
+            continue
+        if value is True:
+            args.append(flag)
+        elif isinstance(value, (list, tuple)) and any(
+            isinstance(v, (list, tuple, str)) for v in value
+        ):
+            for v in value:
+                args += [flag, _one_value(v)]
+        else:
+            args += [flag, _one_value(value)]
+    return args
+
+
+def _one_value(value: Any) -> str:
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return ",".join(str(v) for v in value)
+    if isinstance(value, PathLike):
+        return str(value.__fspath__())
+    return str(value)
+
+
+class Segmentation:
+    """The result of :func:`segment`.
+
+    Attributes
+    ----------
+    labels : numpy.ndarray
+        Phase index per pixel/voxel (uint8, the input's shape), phases
+        ``0..N-1`` ordered by increasing mean: the command line's
+        ``labels.png`` / ``labels.tif``.
+    vertices : numpy.ndarray
+        The final mesh's vertex positions (float64, ``n × 2`` or ``n × 3``;
+        x, y[, z] in pixels/voxels, x along the last array axis).
+    cells : numpy.ndarray
+        Its triangles (2D) or tetrahedra (3D) as vertex indices (uint32).
+    cell_phases : numpy.ndarray
+        Each cell's phase index (uint8), as in ``labels``.
+    report : dict
+        What ``report.json`` holds: parameters, energy per iteration,
+        convergence, timings, counts.
+    """
+
+    def __init__(self, native: Any):
+        self._native = native
+
+    @cached_property
+    def labels(self) -> np.ndarray:
+        return self._native.labels
+
+    @cached_property
+    def vertices(self) -> np.ndarray:
+        return self._native.vertices
+
+    @cached_property
+    def cells(self) -> np.ndarray:
+        return self._native.cells
+
+    @cached_property
+    def cell_phases(self) -> np.ndarray:
+        return self._native.cell_phases
+
+    @cached_property
+    def report(self) -> dict[str, Any]:
+        return json.loads(self._native.report_json)
+
+    def write(self, dir: Union[str, PathLike], outputs: str = "all") -> None:
+        """Writes the command line's output files into ``dir`` (created if
+        missing; all or nothing): the labels (``labels.png`` / ``labels.tif``),
+        the overlay (2D), the VTK mesh, interface, image and scene, the
+        per-phase tables and ``report.json``. ``outputs`` chooses some, as
+        ``--outputs`` does (e.g. ``"labels,report"``). Raises OSError if the
+        directory cannot be written."""
+        self._native.write(str(dir), outputs)
+
+    def __repr__(self) -> str:
+        r = self.report
+        return (
+            f"<Segmentation {'×'.join(map(str, self.labels.shape))}, "
+            f"{len(r['ordered_means'])} phases, {r['iterations']} iterations, "
+            f"converged={r['converged']}>"
+        )
+
+
+def segment(image: Any, phases: Union[int, str] = 2, **options: Any) -> Segmentation:
+    """Segments a 2D image (rows × columns) or a 3D volume (slices × rows ×
+    columns) into ``phases`` phases.
+
+    Any integer or floating-point dtype is accepted, with the intensities the
+    file readers would give: uint8 divided by 255, uint16 by 65535, float
+    images as they are (2D), every other type and float volumes mapped by
+    their own range to [0, 1].
+
+    Every option of ``dsc-seg segment`` (2D) or ``dsc-seg segment3d`` (3D)
+    is a keyword, ``-`` written ``_``: for example ``edge_length=4``,
+    ``max_iterations=200``, ``no_label_flips=True``, ``init="disks",
+    disk=[(64, 64, 20)]``, ``rigidity=0.5``. Run ``dsc-seg segment --help``
+    for the list.
+
+    The GIL is released while the segmentation runs, so threads (or a Dask
+    worker's threads) can segment several images at once.
+
+    Raises ValueError for bad arguments or an unusable image, OSError when a
+    file named by an option cannot be read.
+    """
+    array = np.asarray(image)
+    args = _option_args({"phases": phases, **options})
+    return Segmentation(_native.segment(array, args))
+
+
+def phantom(
+    name: str = "two_phase", size: int = 256, noise: float = 0.1, seed: int = 1
+) -> tuple[np.ndarray, np.ndarray]:
+    """A test image and its true labels, as uint8 arrays: the images
+    ``dsc-seg phantom`` (2D: ``two_phase``, ``four_phase``, ``fig2`` ...
+    ``fig6``) or ``dsc-seg phantom3d`` (3D: ``two_balls``, ``torus``,
+    ``hollow_sphere``) writes, of side ``size`` with Gaussian noise of
+    standard deviation ``noise`` (intensities in [0, 1]).
+
+    Returns ``(image, truth)``; ``truth`` holds the phase per pixel/voxel."""
+    return _native.phantom(name, size, noise, seed)

@@ -1,0 +1,148 @@
+"""dsc_seg.segment against the command line: same labels on the phantoms in
+2D and 3D, dtypes, options as keywords, errors, written outputs, and the GIL
+released during a run."""
+
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+import tifffile
+from PIL import Image
+
+import dsc_seg
+
+
+@pytest.mark.parametrize("name,phases", [("two_phase", 2), ("four_phase", 4)])
+def test_labels_identical_to_the_cli_2d(tmp_path, cli, name, phases):
+    cli("phantom", name, "--size", 128, "--noise", 0.2, "--out", tmp_path)
+    png = tmp_path / f"{name}.png"
+    image, truth = dsc_seg.phantom(name, size=128, noise=0.2)
+    assert np.array_equal(np.asarray(Image.open(png)), image)
+    cli("segment", png, "--phases", phases, "--quiet", "--out", tmp_path / "cli")
+    cli_labels = np.asarray(Image.open(tmp_path / "cli" / "labels.png"))
+
+    result = dsc_seg.segment(image, phases=phases)
+    assert result.labels.dtype == np.uint8
+    assert result.labels.shape == image.shape
+    assert np.array_equal(result.labels, cli_labels)
+    assert (result.labels == truth).mean() > 0.9
+    # The same mesh as the command line's report counts.
+    report = result.report
+    assert report["cells"] == len(result.cells) == len(result.cell_phases)
+    assert report["vertices"] == len(result.vertices)
+    assert result.vertices.shape[1] == 2 and result.cells.shape[1] == 3
+    assert set(np.unique(result.cell_phases)) <= set(range(phases))
+
+
+def test_labels_identical_to_the_cli_3d(tmp_path, cli):
+    cli("phantom3d", "two_balls", "--size", 24, "--noise", 0.1, "--out", tmp_path)
+    tif = tmp_path / "two_balls.tif"
+    volume, truth = dsc_seg.phantom("two_balls", size=24, noise=0.1)
+    assert np.array_equal(tifffile.imread(tif), volume)
+    cli("segment3d", tif, "--max-iterations", 30, "--quiet", "--out", tmp_path / "cli")
+    cli_labels = tifffile.imread(tmp_path / "cli" / "labels.tif")
+
+    result = dsc_seg.segment(volume, max_iterations=30)
+    assert result.labels.shape == volume.shape == (24, 24, 24)
+    assert np.array_equal(result.labels, cli_labels)
+    assert (result.labels == truth).mean() > 0.9
+    assert result.vertices.shape[1] == 3 and result.cells.shape[1] == 4
+    assert result.report["cells"] == len(result.cells)
+
+
+def test_dtypes_map_as_the_file_readers_do():
+    image, truth = dsc_seg.phantom("two_phase", size=64)
+    reference = dsc_seg.segment(image).labels
+    as_u16 = image.astype(np.uint16) * 257
+    as_f32 = image.astype(np.float32) / np.float32(255)
+    for same in (as_u16, as_f32):
+        assert np.array_equal(dsc_seg.segment(same).labels, reference), same.dtype
+    for other in (image.astype(np.int32) - 100, image.astype(np.int64) * 1000):
+        labels = dsc_seg.segment(other).labels
+        assert (labels == truth).mean() > 0.9, other.dtype
+
+
+def test_options_are_the_cli_options_as_keywords():
+    image, _ = dsc_seg.phantom("two_phase", size=64)
+    r = dsc_seg.segment(
+        image,
+        max_iterations=5,
+        edge_length=4,
+        no_label_flips=True,
+        init="disks",
+        disk=[(32, 32, 12), (10, 10, 4, 1)],
+    )
+    params = r.report["params"]
+    assert r.report["iterations"] <= 5
+    assert params["edge_length"] == 4
+    assert params["label_flips"] is False
+    assert len(params["init"]["disks"]) == 2
+
+
+def test_bad_arguments_raise_value_error_with_the_cli_message(tmp_path):
+    image, _ = dsc_seg.phantom("two_phase", size=32)
+    with pytest.raises(ValueError, match="unexpected keyword argument 'no_such_option'"):
+        dsc_seg.segment(image, no_such_option=1)
+    with pytest.raises(ValueError, match="number of phases must be between 2 and 64"):
+        dsc_seg.segment(image, phases=70)
+    with pytest.raises(ValueError, match="--init disks needs at least one --disk"):
+        dsc_seg.segment(image, init="disks")
+    with pytest.raises(ValueError, match="dimensions"):
+        dsc_seg.segment(np.zeros(10))
+    with pytest.raises(ValueError, match="unsupported array type"):
+        dsc_seg.segment(np.zeros((32, 32), dtype=bool))
+    with pytest.raises(ValueError, match="NaN"):
+        dsc_seg.segment(np.full((32, 32), np.nan))
+    with pytest.raises(OSError, match="nope.png"):
+        dsc_seg.segment(image, init="labels", init_labels=tmp_path / "nope.png")
+    with pytest.raises(ValueError, match="unknown"):
+        dsc_seg.phantom("no_such_phantom")
+
+
+def test_write_gives_the_cli_files(tmp_path):
+    image, _ = dsc_seg.phantom("two_phase", size=48)
+    result = dsc_seg.segment(image)
+    result.write(tmp_path / "all")
+    names = {p.name for p in (tmp_path / "all").iterdir()}
+    assert {"labels.png", "overlay.png", "overlay.svg", "mesh.vtu", "report.json"} <= names
+    assert not [n for n in names if n.startswith(".")], names
+    assert np.array_equal(np.asarray(Image.open(tmp_path / "all" / "labels.png")), result.labels)
+    result.write(tmp_path / "some", outputs="labels,report")
+    assert {p.name for p in (tmp_path / "some").iterdir()} == {"labels.png", "report.json"}
+    with pytest.raises(ValueError, match="unknown output"):
+        result.write(tmp_path / "bad", outputs="labels,nonsense")
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(OSError, match="not a directory"):
+        result.write(tmp_path / "file")
+
+
+def test_the_gil_is_released_during_a_run():
+    """With a 10 s switch interval the main thread keeps the GIL unless it
+    releases it: another thread counts only while segment() runs without it."""
+    image, _ = dsc_seg.phantom("four_phase", size=256)
+    count = 0
+    stop = False
+
+    def counter():
+        nonlocal count
+        while not stop:
+            count += 1
+            time.sleep(0.0005)
+
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(10.0)
+    thread = threading.Thread(target=counter)
+    try:
+        thread.start()
+        while count == 0:
+            time.sleep(0.001)
+        before = count
+        dsc_seg.segment(image, phases=4)
+        during = count - before
+    finally:
+        stop = True
+        thread.join()
+        sys.setswitchinterval(old)
+    assert during > 5, during
