@@ -176,13 +176,15 @@ pub struct Segment3dOptions {
     /// Number of phases N, 2..=64.
     #[arg(long, allow_hyphen_values = true, default_value_t = 2)]
     pub phases: i64,
-    /// Average edge length L of the mesh in voxels [default: smallest side/64·sqrt(N-1) clamped to 3..10].
+    /// Average edge length L of the mesh in the volume's length unit (voxels without a voxel
+    /// size) [default: smallest side/64·sqrt(N-1) clamped to 3..10 voxel-sized steps].
     #[arg(long, allow_hyphen_values = true)]
     pub edge_length: Option<f64>,
     /// Initialisation.
     #[arg(long, value_enum, default_value_t = Init3Kind::Histogram)]
     pub init: Init3Kind,
-    /// A ball for --init balls: X,Y,Z,R in voxels, optionally ,PHASE (default 1). Repeatable.
+    /// A ball for --init balls: X,Y,Z,R in the volume's length unit from the corner of voxel 0
+    /// (voxels without a voxel size), optionally ,PHASE (default 1). Repeatable.
     #[arg(
         long = "ball",
         value_name = "X,Y,Z,R[,PHASE]",
@@ -199,12 +201,37 @@ pub struct Segment3dOptions {
     #[allow(rustdoc::broken_intra_doc_links)] // the brackets are intervals, shown as is by --help
     #[arg(long, value_name = "FILE")]
     pub init_surface: Option<PathBuf>,
+    /// Voxel size X,Y,Z to use instead of the file's (a NIfTI's axes keep
+    /// their directions and voxel 0 its place).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub spacing: Option<String>,
     /// The evolution's options.
     #[command(flatten)]
     pub evolution: EvolutionArgs,
 }
 
 impl Segment3dOptions {
+    /// `--spacing X,Y,Z`: three positive numbers.
+    pub fn spacing(&self) -> Result<Option<[f64; 3]>> {
+        let Some(s) = &self.spacing else {
+            return Ok(None);
+        };
+        let bad = || {
+            Error::Usage(format!(
+                "--spacing {s:?}: expected three positive numbers X,Y,Z"
+            ))
+        };
+        let v: Vec<f64> = s
+            .split(',')
+            .map(|t| t.trim().parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| bad())?;
+        match v[..] {
+            [x, y, z] if v.iter().all(|d| d.is_finite() && *d > 0.0) => Ok(Some([x, y, z])),
+            _ => Err(bad()),
+        }
+    }
+
     /// The segmentation parameters these options give (see
     /// [`SegmentOptions::params`] for `--init labels`).
     pub fn params(&self) -> Result<SegmentParams> {

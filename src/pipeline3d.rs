@@ -42,6 +42,8 @@ pub struct Segment3dJob {
     pub outputs: Outputs,
     /// No progress bar.
     pub quiet: bool,
+    /// The voxel size (x, y, z) to use instead of the file's.
+    pub spacing: Option<[f64; 3]>,
 }
 
 /// Sides of the 3D phantoms.
@@ -170,6 +172,10 @@ pub fn with_init_labels3(
 pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
     let t_load = Instant::now();
     let (volume, truth) = load_volume(&job.source)?;
+    let volume = match job.spacing {
+        Some(s) => volume.respaced(s),
+        None => volume,
+    };
     let params = with_init_labels3(
         job.params.clone(),
         job.init_labels.as_deref(),
@@ -217,8 +223,16 @@ pub(crate) fn segment_volume_then<T>(
     ready: impl FnOnce() -> Result<T>,
 ) -> Result<(Segmented, T)> {
     let dims = volume.dims();
+    let frame = volume.frame();
     let view = ImageView::new_3d(dims, volume.data())
-        .ok_or_else(|| Error::Usage("volume buffer does not match its size".into()))?;
+        .ok_or_else(|| Error::Usage("volume buffer does not match its size".into()))?
+        .with_spacing(frame.domain_scale)
+        .ok_or_else(|| {
+            Error::Usage(format!(
+                "the voxel size {:?} must be positive and finite",
+                frame.spacing
+            ))
+        })?;
     let t_seg = Instant::now();
     let mut seg = match init_surface {
         None => Segmentation::<D3>::new(view, params.clone())?,
@@ -255,7 +269,6 @@ pub(crate) fn segment_volume_then<T>(
         quality: quality(complex),
     };
     let mut report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
-    let frame = volume.frame();
     let measurements = Measurements::from_labels(
         &labels,
         volume.data(),
@@ -281,11 +294,12 @@ pub(crate) fn segment_volume_then<T>(
         report: report_json,
         frame,
         measurements,
-        render: Render::Volume(
-            Some(volume.data().to_vec()),
-            Box::new(complex.clone()),
+        render: Render::Volume {
+            values: Some(volume.data().to_vec()),
+            complex: Box::new(complex.clone()),
             order,
-        ),
+            nifti_header: volume.nifti_header().map(<[u8]>::to_vec),
+        },
     };
     Ok((result, ready))
 }
@@ -298,6 +312,13 @@ fn surface_segmentation<'a>(
     path: &Path,
 ) -> Result<Segmentation<'a, D3>> {
     use crate::segment::tetgen_init::complex_from_surface;
+    if view.spacing != [1.0; 3] {
+        return Err(Error::Usage(format!(
+            "--init-surface {} is in voxel coordinates: it needs a volume without a voxel size \
+             (give --spacing 1,1,1)",
+            path.display()
+        )));
+    }
     let surface = crate::io::surface::read_surface(path)
         .map_err(|e| Error::Usage(format!("--init-surface {}: {e}", path.display())))?;
     params.validate_dims(view.dims)?;
@@ -366,6 +387,7 @@ mod tests {
             init_surface: None,
             outputs: Outputs::ALL,
             quiet: true,
+            spacing: None,
         };
         let report = run_segment3d(&job).unwrap();
         assert!(report.cells > 0);

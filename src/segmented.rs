@@ -10,7 +10,9 @@
 use crate::complex::{Complex2, Complex3};
 use crate::error::{Error, Result};
 use crate::io::resolution::Resolution;
-use crate::io::{save_gray8_png, save_labels_tiff, write_bytes_atomic, write_vti, write_vtm};
+use crate::io::{
+    save_gray8_png, save_labels_nifti, save_labels_tiff, write_bytes_atomic, write_vti, write_vtm,
+};
 use crate::io::{Frame, Image2, Overlay};
 use crate::segment::measurements::Measurements;
 use crate::segment::SegmentReport;
@@ -50,10 +52,22 @@ pub(crate) enum Render {
     /// The segmented image (under the overlay, in `image.vti`), the final
     /// complex and the rank of each mesh label, for the VTK files.
     Image(Image2, Box<Complex2>, Vec<u8>),
-    /// The volume's values for `image.vti` (when written), the final
-    /// complex and the rank of each mesh label.
-    Volume(Option<Vec<f32>>, Box<Complex3>, Vec<u8>),
+    /// A volume.
+    Volume {
+        /// Its values, for `image.vti`.
+        values: Option<Vec<f32>>,
+        /// The final complex.
+        complex: Box<Complex3>,
+        /// The rank of each mesh label.
+        order: Vec<u8>,
+        /// The header of a NIfTI input: the labels are written as NIfTI
+        /// with its geometry (`labels.nii.gz`).
+        nifti_header: Option<Vec<u8>>,
+    },
 }
+
+/// The label map of a NIfTI input.
+const NIFTI_LABELS: &str = "labels.nii.gz";
 
 /// The output files a run writes; `--outputs` chooses among them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -198,8 +212,16 @@ impl Segmented {
                     write_vti(path("image.vti"), frame, "intensity", image.data())?;
                 }
             }
-            Render::Volume(values, complex, order) => {
-                if outputs.labels {
+            Render::Volume {
+                values,
+                complex,
+                order,
+                nifti_header,
+            } => {
+                if let (true, Some(header)) = (outputs.labels, nifti_header) {
+                    let phases = self.measurements.phases.len();
+                    save_labels_nifti(path(NIFTI_LABELS), header, &self.labels, phases)?;
+                } else if outputs.labels {
                     let d = [self.dims[0], self.dims[1], self.dims[2]];
                     let resolution = Resolution {
                         spacing: frame.spacing,
@@ -240,7 +262,19 @@ impl Segmented {
                 serde_json::to_vec_pretty(&report).map_err(|e| Error::Usage(e.to_string()))?;
             write_bytes_atomic(path("report.json"), &json)?;
         }
-        stage.publish(dir, &outputs.files(self.is_3d()))
+        let mut files = outputs.files(self.is_3d());
+        if let Render::Volume {
+            nifti_header: Some(_),
+            ..
+        } = &self.render
+        {
+            for f in &mut files {
+                if *f == "labels.tif" {
+                    *f = NIFTI_LABELS;
+                }
+            }
+        }
+        stage.publish(dir, &files)
     }
 
     fn write_2d(

@@ -211,6 +211,11 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
 fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
     let outputs = Outputs::parse(&a.batch.outputs, true)?;
     if is_batch(&a.volumes, true) {
+        if a.options.spacing.is_some() {
+            return Err(Error::Usage(
+                "--spacing applies to a single volume, not to a batch".into(),
+            ));
+        }
         let task = Task::Volume {
             params: a.options.params()?,
             init_labels: a.options.init_labels.clone(),
@@ -227,6 +232,7 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
             seed: a.phantom_seed,
         },
     };
+    let spacing = a.options.spacing()?;
     let job = Segment3dJob {
         source,
         out: a.out,
@@ -235,6 +241,7 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
         init_surface: a.options.init_surface,
         outputs,
         quiet: a.quiet,
+        spacing,
     };
     let report = run_segment3d(&job)?;
     print_warnings(&report);

@@ -8,8 +8,17 @@
 //! units, voxel `(x,y,z)` covers `[x,x+1) × [y,y+1) × [z,z+1)` and its value
 //! sits at the centre `(x+0.5, y+0.5, z+0.5)`. For a TIFF stack or a folder
 //! of slices, `x` is the column, `y` the row (growing downwards) and `z` the
-//! page/slice index. The physical voxel size is kept in [`Volume::spacing`]
-//! as metadata only; all coordinates here are in voxel units.
+//! page/slice index; a NIfTI volume keeps its stored axis order. The
+//! physical voxel size ([`Volume::spacing`], [`Volume::unit`]) and the
+//! placement in the world ([`Volume::frame`]: the NIfTI affine, or
+//! `index · spacing`) come with the volume; the segmentation works in
+//! `index · spacing` lengths (see [`crate::io::frame`]).
+//!
+//! NIfTI-1 is read and its label maps written here rather than through the
+//! `nifti` crate: that crate's affine needs nalgebra 0.35 (this crate is on
+//! 0.34, so both would be built) and its writer ndarray, while the header
+//! fields needed are few; the label map copies the input's header byte for
+//! byte, so its geometry cannot drift from the input's.
 //!
 //! # Intensities
 //!
@@ -48,6 +57,8 @@ pub struct Volume {
     /// Index to world (a NIfTI affine); `None`: `index · spacing`.
     affine: Option<Affine>,
     source: FrameSource,
+    /// The 348-byte header of a NIfTI input, the template of its label map.
+    nifti_header: Option<Vec<u8>>,
 }
 
 impl Volume {
@@ -73,6 +84,7 @@ impl Volume {
             intensity: None,
             affine: None,
             source: FrameSource::Default,
+            nifti_header: None,
         }
     }
 
@@ -111,6 +123,26 @@ impl Volume {
         self.affine = Some(affine);
         self.source = source;
         self
+    }
+
+    /// Returns the volume with voxels of size `spacing` instead of the
+    /// file's: the axes keep their world directions and voxel 0 its place.
+    pub fn respaced(mut self, spacing: [f64; 3]) -> Self {
+        if let Some(a) = &mut self.affine {
+            for row in a.iter_mut() {
+                for (c, v) in row.iter_mut().take(3).enumerate() {
+                    *v *= spacing[c] / self.spacing[c];
+                }
+            }
+        }
+        self.spacing = spacing;
+        self.source = FrameSource::Given;
+        self
+    }
+
+    /// The header of the NIfTI file this volume was read from.
+    pub fn nifti_header(&self) -> Option<&[u8]> {
+        self.nifti_header.as_deref()
     }
 
     /// Where the voxels sit in the world (see [`Frame`]).
@@ -260,6 +292,7 @@ impl Volume {
             spacing: resolution.as_ref().map_or([1.0; 3], |r| r.spacing),
             unit: resolution.as_ref().map_or("px".into(), |r| r.unit.clone()),
             affine: None,
+            nifti_header: None,
             source: if resolution.is_some() {
                 FrameSource::TiffResolution
             } else {
@@ -318,9 +351,10 @@ impl Volume {
     /// Loads a single-file NIfTI-1 volume (`.nii`, or gzip-compressed
     /// `.nii.gz`), either endianness, with datatype uint8, int8, int16,
     /// uint16, int32, uint32, float32 or float64. `scl_slope`/`scl_inter`
-    /// are applied, `pixdim[1..=3]` gives the spacing, and the voxel axes are
-    /// used as stored (the qform/sform orientation is ignored). Dimensions
-    /// beyond the third must be 1.
+    /// are applied, and the voxel axes are used as stored. The frame is the
+    /// sform if its code is set, else the qform, else `pixdim` alone; the
+    /// spacing is the length of the affine's columns, the unit from
+    /// `xyzt_units` (mm when unset). Dimensions beyond the third must be 1.
     pub fn load_nifti(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
         let mut bytes = std::fs::read(path).map_err(|e| IoError::unreadable(path, e))?;
@@ -690,9 +724,138 @@ fn parse_nifti(path: &Path, b: &[u8]) -> Result<Volume> {
             1.0
         }
     };
-    Ok(Volume::from_raw(n[0], n[1], n[2], data)
-        .with_spacing([sp(1), sp(2), sp(3)])
-        .with_intensity(intensity))
+    let (affine, source) = nifti_affine(&f32_at, &i16_at, [sp(1), sp(2), sp(3)]);
+    let spacing = std::array::from_fn(|c| {
+        let len = (0..3).map(|r| affine[r][c].powi(2)).sum::<f64>().sqrt();
+        if len.is_finite() && len > 0.0 {
+            len
+        } else {
+            1.0
+        }
+    });
+    let mut volume = Volume::from_raw(n[0], n[1], n[2], data)
+        .with_spacing(spacing)
+        .with_unit(nifti_unit(b[123]))
+        .with_intensity(intensity)
+        .with_affine(affine, source);
+    volume.nifti_header = Some(b[..NIFTI_HDR].to_vec());
+    Ok(volume)
+}
+
+/// The index-to-world affine of a NIfTI-1 header: the sform when its code
+/// is set, else the qform (quaternion, offsets, `pixdim` and the `qfac`
+/// sign in `pixdim[0]`), else `pixdim` alone (NIfTI's "method 1").
+fn nifti_affine(
+    f32_at: &dyn Fn(usize) -> f32,
+    i16_at: &dyn Fn(usize) -> i16,
+    pixdim: [f64; 3],
+) -> (Affine, FrameSource) {
+    let f = |o: usize| f64::from(f32_at(o));
+    let finite = |a: &Affine| a.iter().flatten().all(|v| v.is_finite());
+    if i16_at(254) > 0 {
+        let a: Affine = std::array::from_fn(|r| std::array::from_fn(|c| f(280 + 16 * r + 4 * c)));
+        if finite(&a) {
+            return (a, FrameSource::NiftiSform);
+        }
+    }
+    if i16_at(252) > 0 {
+        let (b, c, d) = (f(256), f(260), f(264));
+        let a = (1.0 - (b * b + c * c + d * d)).max(0.0).sqrt();
+        let rot = [
+            [
+                a * a + b * b - c * c - d * d,
+                2.0 * (b * c - a * d),
+                2.0 * (b * d + a * c),
+            ],
+            [
+                2.0 * (b * c + a * d),
+                a * a + c * c - b * b - d * d,
+                2.0 * (c * d - a * b),
+            ],
+            [
+                2.0 * (b * d - a * c),
+                2.0 * (c * d + a * b),
+                a * a + d * d - b * b - c * c,
+            ],
+        ];
+        let qfac = if f(76) < 0.0 { -1.0 } else { 1.0 };
+        let scale = [pixdim[0], pixdim[1], pixdim[2] * qfac];
+        let offset = [f(268), f(272), f(276)];
+        let q: Affine = std::array::from_fn(|r| {
+            [
+                rot[r][0] * scale[0],
+                rot[r][1] * scale[1],
+                rot[r][2] * scale[2],
+                offset[r],
+            ]
+        });
+        if finite(&q) {
+            return (q, FrameSource::NiftiQform);
+        }
+    }
+    let diag: Affine =
+        std::array::from_fn(|r| std::array::from_fn(|c| if c == r { pixdim[r] } else { 0.0 }));
+    (diag, FrameSource::NiftiPixdim)
+}
+
+/// The spatial unit of `xyzt_units` (unknown is read as mm, as most tools do).
+fn nifti_unit(xyzt_units: u8) -> &'static str {
+    match xyzt_units & 0x07 {
+        1 => "m",
+        3 => "um",
+        _ => "mm",
+    }
+}
+
+/// Saves `labels` (x fastest, the input's voxel order) as a NIfTI-1 label
+/// map with the geometry of `reference` (a 348-byte NIfTI-1 header, e.g.
+/// [`Volume::nifti_header`]): the header is copied, so the shape, axis
+/// order, qform/sform codes and affines, units and endianness are the
+/// input's, and only the data type (uint8), scaling (none), display range
+/// and intent (labels) change. Gzip-compressed if the name ends in `.gz`.
+pub fn save_labels_nifti(
+    path: impl AsRef<Path>,
+    reference: &[u8],
+    labels: &[u8],
+    phases: usize,
+) -> Result<()> {
+    let path = path.as_ref();
+    if reference.len() != NIFTI_HDR {
+        return Err(IoError::invalid(
+            path,
+            "the reference NIfTI header is not 348 bytes",
+        ));
+    }
+    let le = i32::from_le_bytes(reference[0..4].try_into().expect("4 bytes")) == 348;
+    let mut h = reference.to_vec();
+    let put16 = |h: &mut Vec<u8>, o: usize, v: i16| {
+        h[o..o + 2].copy_from_slice(&if le { v.to_le_bytes() } else { v.to_be_bytes() })
+    };
+    let put32 = |h: &mut Vec<u8>, o: usize, v: f32| {
+        h[o..o + 4].copy_from_slice(&if le { v.to_le_bytes() } else { v.to_be_bytes() })
+    };
+    put16(&mut h, 68, 1002); // intent: NIFTI_INTENT_LABEL
+    put16(&mut h, 70, 2); // uint8
+    put16(&mut h, 72, 8);
+    put32(&mut h, 108, NIFTI_HDR as f32 + 4.0);
+    put32(&mut h, 112, 1.0);
+    put32(&mut h, 116, 0.0);
+    put32(&mut h, 124, phases.saturating_sub(1) as f32); // cal_max
+    put32(&mut h, 128, 0.0); // cal_min
+    h.extend_from_slice(&[0; 4]); // no extensions
+    h.extend_from_slice(labels);
+    let gz = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
+    if gz {
+        write_atomic(path, |w| {
+            let mut enc = flate2::write::GzEncoder::new(w, flate2::Compression::default());
+            std::io::Write::write_all(&mut enc, &h)?;
+            enc.finish().map(|_| ())
+        })
+    } else {
+        write_bytes_atomic(path, &h)
+    }
 }
 
 /// Decodes one NIfTI sample of `datatype` from its bytes.
@@ -721,7 +884,7 @@ fn decode_sample(datatype: i16, c: &[u8], le: bool) -> f64 {
 }
 
 /// Builds a little-endian single-file NIfTI-1 header (datatype float32).
-fn nifti_header_f32(dims: [usize; 3], spacing: [f64; 3]) -> Vec<u8> {
+fn nifti_header_f32(dims: [usize; 3], spacing: [f64; 3], affine: Option<&Affine>) -> Vec<u8> {
     let mut h = vec![0u8; 352];
     h[0..4].copy_from_slice(&348i32.to_le_bytes());
     let dim: [i16; 8] = [
@@ -755,11 +918,22 @@ fn nifti_header_f32(dims: [usize; 3], spacing: [f64; 3]) -> Vec<u8> {
     h[108..112].copy_from_slice(&352f32.to_le_bytes());
     h[112..116].copy_from_slice(&1f32.to_le_bytes());
     h[344..348].copy_from_slice(b"n+1\0");
+    if let Some(a) = affine {
+        h[123] = 2; // millimetres
+        h[254..256].copy_from_slice(&2i16.to_le_bytes()); // sform: aligned
+        for (r, row) in a.iter().enumerate() {
+            for (c, v) in row.iter().enumerate() {
+                let o = 280 + 16 * r + 4 * c;
+                h[o..o + 4].copy_from_slice(&(*v as f32).to_le_bytes());
+            }
+        }
+    }
     h
 }
 
 /// Saves a volume as a little-endian float32 NIfTI-1 file (gzip-compressed
-/// if the name ends in `.gz`), atomically, with the spacing in `pixdim`.
+/// if the name ends in `.gz`), atomically, with the spacing in `pixdim` and
+/// the volume's affine, if it has one, as the sform (code 2, millimetres).
 /// Intended for inspecting intermediate results in other tools.
 pub fn save_nifti(path: impl AsRef<Path>, volume: &Volume) -> Result<()> {
     let path = path.as_ref();
@@ -769,7 +943,7 @@ pub fn save_nifti(path: impl AsRef<Path>, volume: &Volume) -> Result<()> {
             "NIfTI-1 dimensions are limited to 32767",
         ));
     }
-    let mut bytes = nifti_header_f32(volume.dims(), volume.spacing);
+    let mut bytes = nifti_header_f32(volume.dims(), volume.spacing, volume.affine.as_ref());
     bytes.reserve(4 * volume.data.len());
     for v in &volume.data {
         bytes.extend_from_slice(&v.to_le_bytes());

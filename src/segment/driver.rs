@@ -294,7 +294,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 phases: params.phases,
             });
         }
-        let l = params.resolved_edge_length(image.dims);
+        let l = params.resolved_edge_length_in(image.dims, image.spacing);
         let dsc = DscParams::new::<K>(l);
         let given = preset.is_some();
         let sizes = (params.sizing.adaptive).then(|| params.sizing.sizes(&image.dims[..K::N], l));

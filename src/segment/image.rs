@@ -4,13 +4,18 @@
 ///
 /// Pixel `(x, y)` covers `[x, x+1) × [y, y+1)` of the complex's domain and has
 /// its centre at `(x + 0.5, y + 0.5)`; `y` is the row index. A 2D image has
-/// `dims[2] == 1`.
+/// `dims[2] == 1`. A volume may have a physical voxel size
+/// ([`ImageView::with_spacing`]): voxel `(x, y, z)` then covers
+/// `[x, x+1)·s_x × [y, y+1)·s_y × [z, z+1)·s_z` and the complex, its edge
+/// length and every length and area of the segmentation are physical.
 #[derive(Clone, Copy, Debug)]
 pub struct ImageView<'a> {
     /// Extent in pixels/voxels along each axis.
     pub dims: [usize; 3],
     /// The samples, `dims[0] · dims[1] · dims[2]` of them.
     pub data: &'a [f32],
+    /// Size of a voxel along x, y, z in the complex's units (1 for 2D images).
+    pub spacing: [f64; 3],
 }
 
 impl<'a> ImageView<'a> {
@@ -19,6 +24,7 @@ impl<'a> ImageView<'a> {
         (width.checked_mul(height) == Some(data.len())).then_some(ImageView {
             dims: [width, height, 1],
             data,
+            spacing: [1.0; 3],
         })
     }
 
@@ -28,7 +34,25 @@ impl<'a> ImageView<'a> {
             .checked_mul(dims[1])
             .and_then(|a| a.checked_mul(dims[2]))
             == Some(data.len()))
-        .then_some(ImageView { dims, data })
+        .then_some(ImageView {
+            dims,
+            data,
+            spacing: [1.0; 3],
+        })
+    }
+
+    /// The view of a volume with voxels of the given size (positive and
+    /// finite; `None` otherwise).
+    pub fn with_spacing(self, spacing: [f64; 3]) -> Option<Self> {
+        spacing
+            .iter()
+            .all(|s| s.is_finite() && *s > 0.0)
+            .then_some(ImageView { spacing, ..self })
+    }
+
+    /// The domain's extent along each axis (`dims · spacing`).
+    pub fn extent(&self) -> [f64; 3] {
+        std::array::from_fn(|a| self.dims[a] as f64 * self.spacing[a])
     }
 
     /// Width in pixels.

@@ -128,7 +128,7 @@ pub fn nearest_pixel<P: Point>(image: &ImageView<'_>, p: P) -> usize {
     let mut stride = 1;
     for (axis, &dim) in image.dims.iter().enumerate() {
         let c = if axis < 3 && dim > 1 {
-            (p[axis].floor().max(0.0) as usize).min(dim - 1)
+            ((p[axis] / image.spacing[axis]).floor().max(0.0) as usize).min(dim - 1)
         } else {
             0
         };

@@ -420,6 +420,30 @@ impl SegmentParams {
         Ok(())
     }
 
+    /// The edge length to use for an image or volume of `dims` samples of
+    /// size `spacing`, in the same length unit: the given one, or the
+    /// default of [`resolved_edge_length`](Self::resolved_edge_length)
+    /// counted in voxel-sized steps (the cube root of the voxel volume), so
+    /// that cells hold as many voxels as in an isotropic volume of the same
+    /// physical shape.
+    pub fn resolved_edge_length_in(&self, dims: [usize; 3], spacing: [f64; 3]) -> f64 {
+        if self.edge_length.is_some() || spacing == [1.0; 3] {
+            return self.resolved_edge_length(dims);
+        }
+        let axes: Vec<usize> = (0..3).filter(|&a| dims[a] > 1).collect();
+        let step = axes
+            .iter()
+            .map(|&a| spacing[a])
+            .product::<f64>()
+            .powf(1.0 / axes.len().max(1) as f64);
+        let side = axes
+            .iter()
+            .map(|&a| dims[a] as f64 * spacing[a] / step)
+            .fold(f64::INFINITY, f64::min);
+        let side = side.max(1.0) as usize;
+        default_edge_length(side, side, self.phases) * step
+    }
+
     /// The edge length to use for an image or volume of `dims` samples.
     pub fn resolved_edge_length(&self, dims: [usize; 3]) -> f64 {
         // The smallest extent counts (a 2D image has depth 1, which does not):
@@ -476,5 +500,21 @@ mod tests {
             ..p
         };
         assert_eq!(given.resolved_edge_length([512, 512, 20]), 5.5);
+        assert_eq!(
+            given.resolved_edge_length_in([512, 512, 20], [0.5, 0.5, 2.0]),
+            5.5
+        );
+    }
+
+    #[test]
+    fn default_edge_length_counts_voxel_sized_steps() {
+        let p = SegmentParams::new_3d(2);
+        // Unit voxels: as before.
+        assert_eq!(p.resolved_edge_length_in([512, 512, 512], [1.0; 3]), 8.0);
+        // 0.5 × 0.5 × 2 mm voxels, 512 × 512 × 128: a 256 mm cube, counted
+        // in steps of ∛0.5 mm (322 of them), as an isotropic 322³ volume.
+        let step = 0.5f64.cbrt();
+        let l = p.resolved_edge_length_in([512, 512, 128], [0.5, 0.5, 2.0]);
+        assert!((l - 322.0 / 64.0 * step).abs() < 1e-9, "{l}");
     }
 }

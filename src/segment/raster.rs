@@ -344,7 +344,7 @@ impl Raster for D3 {
     fn cell_spans(image: &ImageView<'_>, c: &[Vector3<f64>], visit: &mut impl FnMut(usize, usize)) {
         let [nx, ny, _] = image.dims;
         let t = [c[0], c[1], c[2], c[3]];
-        super::voxel3d::tet_voxels(&t, image.dims, |i, j, k| {
+        super::voxel3d::tet_voxels(&t, image.dims, image.spacing, |i, j, k| {
             let index = i + nx * (j + ny * k);
             visit(index, index + 1)
         });
@@ -369,7 +369,7 @@ impl Raster for D3 {
         let mut t = [0.0; 3];
         for axis in 0..3 {
             let n = image.dims[axis];
-            let x = (p[axis] - 0.5).clamp(0.0, (n - 1) as f64);
+            let x = (p[axis] / image.spacing[axis] - 0.5).clamp(0.0, (n - 1) as f64);
             // (truncation: the floor of a non-negative value)
             i0[axis] = (x as usize).min(n - 1);
             i1[axis] = (i0[axis] + 1).min(n - 1);
@@ -399,15 +399,16 @@ impl Raster for D3 {
 
     fn pixel_centre(image: &ImageView<'_>, index: usize) -> Vector3<f64> {
         let [nx, ny, _] = image.dims;
+        let [sx, sy, sz] = image.spacing;
         Vector3::new(
-            (index % nx) as f64 + 0.5,
-            ((index / nx) % ny) as f64 + 0.5,
-            (index / (nx * ny)) as f64 + 0.5,
+            ((index % nx) as f64 + 0.5) * sx,
+            (((index / nx) % ny) as f64 + 0.5) * sy,
+            ((index / (nx * ny)) as f64 + 0.5) * sz,
         )
     }
 
     fn box_complex(image: &ImageView<'_>, l: f64) -> Result<Complex<D3>, BuildError> {
-        Complex::cuboid(image.dims.map(|d| d as f64), l)
+        Complex::cuboid(image.extent(), l)
     }
 }
 

@@ -120,6 +120,16 @@ impl FilteredFacet {
     }
 }
 
+/// The centre of voxel `v` in the domain: `(v + 0.5) · spacing`.
+#[inline]
+pub fn voxel_centre(v: [usize; 3], spacing: [f64; 3]) -> Vector3<f64> {
+    Vector3::new(
+        (v[0] as f64 + 0.5) * spacing[0],
+        (v[1] as f64 + 0.5) * spacing[1],
+        (v[2] as f64 + 0.5) * spacing[2],
+    )
+}
+
 /// Calls `f(i, j, k)` for every voxel of an `dims` grid whose centre the
 /// positively oriented tet `t` owns (see [`tet_owns`]), in x-fastest order.
 ///
@@ -130,15 +140,24 @@ impl FilteredFacet {
 /// facet's condition is a half-line along the row (the tie rule depends on the
 /// facet only), so the owned centres of a row are contiguous. Integration
 /// spends most of its time here.
-pub fn tet_voxels(t: &[Vector3<f64>; 4], dims: [usize; 3], mut f: impl FnMut(usize, usize, usize)) {
+pub fn tet_voxels(
+    t: &[Vector3<f64>; 4],
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    mut f: impl FnMut(usize, usize, usize),
+) {
     let mut lo = [0usize; 3];
     let mut hi = [0usize; 3];
     for axis in 0..3 {
-        let min = t.iter().map(|p| p[axis]).fold(f64::INFINITY, f64::min);
-        let max = t.iter().map(|p| p[axis]).fold(f64::NEG_INFINITY, f64::max);
-        // Centres c = i + 0.5 with min <= c <= max.
-        lo[axis] = (min - 0.5).ceil().max(0.0) as usize;
-        let top = (max - 0.5).floor();
+        let s = spacing[axis];
+        let min = t.iter().map(|p| p[axis]).fold(f64::INFINITY, f64::min) / s;
+        let max = t.iter().map(|p| p[axis]).fold(f64::NEG_INFINITY, f64::max) / s;
+        // Centres c = i + 0.5 with min <= c <= max; with a spacing the
+        // division may round, so one more voxel each side (the facet tests
+        // decide).
+        let margin = if s == 1.0 { 0.0 } else { 1.0 };
+        lo[axis] = (min - 0.5 - margin).ceil().max(0.0) as usize;
+        let top = (max - 0.5 + margin).floor();
         if top < 0.0 {
             return;
         }
@@ -158,7 +177,7 @@ pub fn tet_voxels(t: &[Vector3<f64>; 4], dims: [usize; 3], mut f: impl FnMut(usi
         for j in lo[1]..=hi[1] {
             let mut inside = false;
             for i in lo[0]..=hi[0] {
-                let p = Vector3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5);
+                let p = voxel_centre([i, j, k], spacing);
                 if facets.iter().all(|fc| fc.inner(&p)) {
                     inside = true;
                     f(i, j, k);
@@ -235,7 +254,7 @@ impl Complex<D3> {
         let mut out = vec![None; dims[0] * dims[1] * dims[2]];
         for c in self.cell_ids() {
             let p = self.cell_points(c);
-            tet_voxels(&p, dims, |i, j, k| {
+            tet_voxels(&p, dims, [1.0; 3], |i, j, k| {
                 out[i + dims[0] * (j + dims[1] * k)] = Some(c);
             });
         }
@@ -250,9 +269,13 @@ mod tests {
 
     /// Counts, for every voxel, how many tets claim it.
     fn claims(c: &Complex<D3>, dims: [usize; 3]) -> Vec<u32> {
+        claims_spaced(c, dims, [1.0; 3])
+    }
+
+    fn claims_spaced(c: &Complex<D3>, dims: [usize; 3], spacing: [f64; 3]) -> Vec<u32> {
         let mut n = vec![0u32; dims[0] * dims[1] * dims[2]];
         for t in c.cell_ids() {
-            tet_voxels(&c.cell_points(t), dims, |i, j, k| {
+            tet_voxels(&c.cell_points(t), dims, spacing, |i, j, k| {
                 n[i + dims[0] * (j + dims[1] * k)] += 1;
             });
         }
@@ -308,6 +331,36 @@ mod tests {
     }
 
     #[test]
+    fn anisotropic_voxel_centres_are_counted_once() {
+        use rand::{Rng, SeedableRng};
+        // 10 × 8 × 6 voxels of 0.3 × 0.7 × 2.1: the domain is 3 × 5.6 × 12.6.
+        let spacing = [0.3, 0.7, 2.1];
+        let dims = [10, 8, 6];
+        let mut c = Complex::cuboid([3.0, 5.6, 12.6], 1.5).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut star = Vec::new();
+        let ids: Vec<VertexId> = c.vertex_ids().collect();
+        for v in ids {
+            // Snap some vertices onto voxel centres, jitter the rest.
+            let p = c.position(v);
+            let q = if rng.random_bool(0.5) {
+                let idx = std::array::from_fn(|a| (p[a] / spacing[a]).floor().max(0.0) as usize);
+                voxel_centre(idx, spacing)
+            } else {
+                p + Vector3::new(
+                    rng.random_range(-0.2..0.2),
+                    rng.random_range(-0.4..0.4),
+                    rng.random_range(-1.0..1.0),
+                )
+            };
+            c.move_towards(v, q, 1e-6, &mut star);
+        }
+        assert!(c.validate().is_empty());
+        let n = claims_spaced(&c, dims, spacing);
+        assert!(n.iter().all(|&k| k == 1));
+    }
+
+    #[test]
     fn tet_voxels_decides_as_tet_owns() {
         // Random tets with corners on voxel centres, planes, or anywhere: the
         // filtered, row-stopping scan claims exactly the centres tet_owns does.
@@ -337,7 +390,7 @@ mod tests {
                 t.swap(0, 1);
             }
             let mut fast = Vec::new();
-            tet_voxels(&t, dims, |i, j, k| fast.push((i, j, k)));
+            tet_voxels(&t, dims, [1.0; 3], |i, j, k| fast.push((i, j, k)));
             let mut brute = Vec::new();
             for k in 0..dims[2] {
                 for j in 0..dims[1] {

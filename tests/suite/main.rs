@@ -11,6 +11,7 @@ mod figures;
 mod forces;
 mod generic;
 mod intensity;
+mod physical;
 mod prop2d;
 mod reseed;
 mod seg3d;

@@ -101,6 +101,7 @@ impl EdgeMap {
         ImageView {
             dims: self.dims,
             data,
+            spacing: [1.0; 3],
         }
     }
 }

@@ -1,0 +1,116 @@
+//! Physical space: an anisotropic, flipped and offset NIfTI volume is
+//! segmented as the physical object it holds, and the outputs keep its
+//! geometry.
+
+use dsc_seg::io::frame::Affine;
+use dsc_seg::io::{save_nifti, FrameSource, Volume};
+use dsc_seg::pipeline::Source;
+use dsc_seg::pipeline3d::{run_segment3d, Segment3dJob};
+use dsc_seg::segment::SegmentParams;
+use dsc_seg::segmented::Outputs;
+use vtkio::model::{DataSet, Piece, Vtk};
+
+/// Voxels of 0.5 × 0.5 × 2 mm, x flipped, origin offset.
+const AFFINE: Affine = [
+    [-0.5, 0.0, 0.0, 30.0],
+    [0.0, 0.5, 0.0, -12.0],
+    [0.0, 0.0, 2.0, 5.0],
+];
+const DIMS: [usize; 3] = [48, 48, 12];
+/// The ball: centre in world millimetres and radius.
+const CENTRE: [f64; 3] = [18.25, -0.25, 15.0];
+const RADIUS: f64 = 7.0;
+
+fn world(i: usize, j: usize, k: usize) -> [f64; 3] {
+    AFFINE.map(|r| r[0] * i as f64 + r[1] * j as f64 + r[2] * k as f64 + r[3])
+}
+
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt()
+}
+
+/// The interface points of `interface.vtp`.
+fn interface_points(path: &std::path::Path) -> Vec<[f64; 3]> {
+    let vtk = Vtk::import(path).unwrap();
+    let DataSet::PolyData { pieces, .. } = vtk.data else {
+        panic!("not polydata")
+    };
+    let Piece::Inline(p) = &pieces[0] else {
+        panic!("not inline")
+    };
+    let flat: Vec<f64> = p.points.clone().cast_into().unwrap();
+    flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+#[test]
+fn an_anisotropic_flipped_nifti_ball_is_round_in_millimetres_and_keeps_its_geometry() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("ball.nii.gz");
+    let volume = Volume::from_fn(DIMS[0], DIMS[1], DIMS[2], |i, j, k| {
+        if distance(world(i, j, k), CENTRE) < RADIUS {
+            0.8
+        } else {
+            0.2
+        }
+    })
+    .with_spacing([0.5, 0.5, 2.0])
+    .with_affine(AFFINE, FrameSource::NiftiSform);
+    save_nifti(&input, &volume).unwrap();
+
+    let mut params = SegmentParams::new_3d(2);
+    params.max_iterations = 60;
+    let job = Segment3dJob {
+        source: Source::File(input.clone()),
+        out: dir.path().join("out"),
+        params,
+        init_labels: None,
+        init_surface: None,
+        outputs: Outputs::ALL,
+        quiet: true,
+        spacing: None,
+    };
+    run_segment3d(&job).unwrap();
+
+    // labels.nii.gz: the input's shape and affine, the ball's volume.
+    let labels = Volume::load(job.out.join("labels.nii.gz")).unwrap();
+    let input_frame = Volume::load(&input).unwrap().frame();
+    assert_eq!(labels.dims(), DIMS);
+    assert_eq!(labels.frame().index_to_world, input_frame.index_to_world);
+    assert_eq!(labels.frame().source, FrameSource::NiftiSform);
+    // uint8 labels load as value / 255: phase 1 is any non-zero voxel.
+    let inside = labels.data().iter().filter(|&&v| v > 0.0).count() as f64 * 0.5;
+    let ball = 4.0 / 3.0 * std::f64::consts::PI * RADIUS.powi(3);
+    assert!((inside / ball - 1.0).abs() < 0.05, "{inside} mm³ vs {ball}");
+
+    // interface.vtp: centred on the ball's world position, round in mm.
+    let points = interface_points(&job.out.join("interface.vtp"));
+    assert!(points.len() > 50);
+    let n = points.len() as f64;
+    let centroid: [f64; 3] = std::array::from_fn(|c| points.iter().map(|p| p[c]).sum::<f64>() / n);
+    let off = distance(centroid, CENTRE);
+    let radii: Vec<f64> = points.iter().map(|&p| distance(p, centroid)).collect();
+    let mean = radii.iter().sum::<f64>() / n;
+    let sd = (radii.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / n).sqrt();
+    // Spread: the radii's standard deviation over their mean.
+    let spread = sd / mean;
+    // Extents along the world axes: a ball treated as isotropic voxels
+    // would come out 4 times flatter along z than along x.
+    let extent = |c: usize| {
+        let (lo, hi) = points
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[c]), hi.max(p[c]))
+            });
+        hi - lo
+    };
+    let (ex, ey, ez) = (extent(0), extent(1), extent(2));
+    eprintln!(
+        "centre off by {off:.3} mm, radius {mean:.3} mm, spread {:.1}%, extents {ex:.2} {ey:.2} {ez:.2} mm",
+        100.0 * spread
+    );
+    assert!(off < 1.0, "centre off by {off} mm");
+    assert!((mean - RADIUS).abs() < 0.1 * RADIUS, "mean radius {mean}");
+    // Within one z voxel (2 mm), the size the data resolves.
+    assert!((ez - ex).abs() < 2.0 && (ey - ex).abs() < 2.0, "extents");
+    assert!(spread <= 0.10, "radius spread {spread}");
+}
