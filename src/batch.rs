@@ -179,12 +179,7 @@ pub fn is_batch_folder(path: &Path, three_d: bool) -> bool {
 pub fn expand_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
     let mut inputs = Vec::new();
     for p in paths {
-        if !p.exists() {
-            return Err(Error::Usage(format!(
-                "input {} does not exist",
-                p.display()
-            )));
-        }
+        // A missing file stays in the list: its row says it cannot be read.
         if !is_batch_folder(p, three_d) {
             inputs.push(p.clone());
         } else if three_d {

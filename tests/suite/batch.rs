@@ -87,11 +87,12 @@ fn folder_with_a_corrupt_file_runs_the_others_and_skips_them_next_time() {
     std::fs::write(folder.join("notes.txt"), b"not an image").unwrap();
     let out = d.path().join("out");
 
-    let first = run(&["--quiet", "--jobs", "2"], &[&folder], &out);
+    let missing = d.path().join("missing.png");
+    let first = run(&["--quiet", "--jobs", "2"], &[&folder, &missing], &out);
     let err = String::from_utf8_lossy(&first.stderr);
     assert_eq!(first.status.code(), Some(1), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    assert!(err.contains("1 of 4 inputs failed"), "{err}");
+    assert!(err.contains("2 of 5 inputs failed"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
     for stem in ["a", "b", "c"] {
         for f in OUTPUTS_2D {
@@ -114,10 +115,13 @@ fn folder_with_a_corrupt_file_runs_the_others_and_skips_them_next_time() {
             "error"
         ]
     );
-    assert_eq!(rows.len(), 5);
+    assert_eq!(rows.len(), 6);
     let broken = row(&rows, "broken");
     assert_eq!(broken[6], "error");
     assert!(broken[7].contains("broken.png"), "{broken:?}");
+    let missing_row = row(&rows, "missing");
+    assert_eq!(missing_row[6], "error");
+    assert!(missing_row[7].contains("missing.png"), "{missing_row:?}");
     for stem in ["a", "b", "c"] {
         let r = row(&rows, stem);
         assert_eq!((r[2].as_str(), r[6].as_str()), ("2", "done"), "{r:?}");
@@ -136,7 +140,7 @@ fn folder_with_a_corrupt_file_runs_the_others_and_skips_them_next_time() {
     // Again: the complete ones are skipped (their files untouched).
     let stamp = |p: PathBuf| std::fs::metadata(p).unwrap().modified().unwrap();
     let before = stamp(out.join("a/mesh.vtu"));
-    let second = run(&["--quiet"], &[&folder], &out);
+    let second = run(&["--quiet"], &[&folder, &missing], &out);
     assert_eq!(second.status.code(), Some(1));
     let rows = summary(&out.join("summary.csv"));
     for stem in ["a", "b", "c"] {
