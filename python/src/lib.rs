@@ -52,7 +52,10 @@ fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyRes
         }
         3 => {
             let o = Options3::try_parse_from(argv).map_err(|e| parse_error(&e))?;
-            let volume = convert::volume(image)?;
+            let volume = match o.options.spacing().map_err(to_py)? {
+                Some(spacing) => convert::volume(image)?.respaced(spacing),
+                None => convert::volume(image)?,
+            };
             let params = o.options.params().map_err(to_py)?;
             let params = with_init_labels3(params, o.options.init_labels.as_deref(), volume.dims())
                 .map_err(to_py)?;
