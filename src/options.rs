@@ -59,6 +59,10 @@ pub struct EvolutionArgs {
     /// side/16, at least L]; implies --adaptive.
     #[arg(long, allow_hyphen_values = true)]
     pub max_edge_length: Option<f64>,
+    /// Adaptive runs: start from a mesh at the largest edge length and
+    /// refine (coarse to fine) instead of starting at L and coarsening.
+    #[arg(long)]
+    pub coarse_start: bool,
 }
 
 impl EvolutionArgs {
@@ -76,6 +80,7 @@ impl EvolutionArgs {
             self.adaptive || self.min_edge_length.is_some() || self.max_edge_length.is_some();
         p.sizing.min_edge_length = self.min_edge_length.or(p.sizing.min_edge_length);
         p.sizing.max_edge_length = self.max_edge_length.or(p.sizing.max_edge_length);
+        p.sizing.coarse_start |= self.coarse_start;
         if let Some(j) = self.junction_force {
             p.junction_force = match j {
                 JunctionArg::Paper => JunctionForce::Paper,

@@ -146,7 +146,7 @@ struct SegmentArgs {
 #[derive(Parser, Debug)]
 #[command(allow_negative_numbers = true)]
 struct PhantomArgs {
-    /// two_phase, four_phase, fig2, fig3, fig4, fig5 or fig6.
+    /// two_phase, four_phase, fig2, fig3, fig4, fig5, fig6 or thin.
     name: String,
     /// Side in pixels.
     #[arg(long, default_value_t = 256)]

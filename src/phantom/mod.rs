@@ -19,6 +19,7 @@ pub mod hard2d;
 pub mod noise;
 pub mod shapes2d;
 pub mod shapes3d;
+pub mod thin;
 
 pub use shapes2d::{
     fig3_seed, fig6_initial_labels, fig6_initial_regions, InitRegion, Phantom2Kind,

@@ -400,11 +400,13 @@ pub enum Phantom2Kind {
     FourPhaseSpecks,
     /// [`hard2d::disks`](super::hard2d::disks) with 2 to 6 phases (`disks2` … `disks6`).
     Disks(u8),
+    /// [`thin`](super::thin::thin): lines, arcs, small blobs, a slit, a star.
+    Thin,
 }
 
 impl Phantom2Kind {
     /// Every kind, in order.
-    pub const ALL: [Phantom2Kind; 16] = [
+    pub const ALL: [Phantom2Kind; 17] = [
         Self::TwoPhase,
         Self::FourPhase,
         Self::Fig2,
@@ -421,6 +423,7 @@ impl Phantom2Kind {
         Self::Disks(4),
         Self::Disks(5),
         Self::Disks(6),
+        Self::Thin,
     ];
 
     /// The command-line name (`two_phase`, `four_phase`, `fig2`, ...).
@@ -442,6 +445,7 @@ impl Phantom2Kind {
             Self::Disks(4) => "disks4",
             Self::Disks(5) => "disks5",
             Self::Disks(_) => "disks6",
+            Self::Thin => "thin",
         }
     }
 
@@ -454,7 +458,7 @@ impl Phantom2Kind {
     /// Number of phases of the phantom.
     pub fn phases(self) -> usize {
         match self {
-            Self::TwoPhase | Self::Fig2 | Self::Fig3 | Self::TwoPhaseSpecks => 2,
+            Self::TwoPhase | Self::Fig2 | Self::Fig3 | Self::TwoPhaseSpecks | Self::Thin => 2,
             Self::FourPhase | Self::Fig4 | Self::FourClose | Self::FourPhaseSpecks => 4,
             Self::Fig5 | Self::Fig6 | Self::ThreeClose => 3,
             Self::Disks(n) => n.clamp(2, 6) as usize,
@@ -477,6 +481,7 @@ impl Phantom2Kind {
             Self::Fig4 => fig4,
             Self::Fig5 => fig5,
             Self::Fig6 => fig6,
+            Self::Thin => super::thin::thin,
         };
         f(size, noise_sigma, seed)
     }

@@ -10,16 +10,20 @@
 //!   every interface whose pixels deviate from its phase's mean clearly more
 //!   than the noise does (its excess residual above the estimated noise is
 //!   both statistically significant and worth at least one smallest cell of
-//!   mislabelled pixels). Such a cell asks for a third of its size at its centroid;
-//!   these requests are remembered for the whole run (they mark structure,
-//!   which does not go away), so a thin line or a small blob ends up in cells
-//!   small enough for the label flips to give it its own phase;
+//!   mislabelled pixels). Such a cell asks for a third of its size at its
+//!   centroid. Requests away from the interfaces are remembered for the
+//!   whole run (they mark structure, which does not go away), so a thin line
+//!   or a small blob ends up in cells small enough for the label flips to
+//!   give it its own phase; requests of cells touching an interface hold for
+//!   one iteration (the interface may be passing through), so an interface
+//!   that cannot fit the data at size `L` (a thin line once labelled, a
+//!   sharp corner) is refined for as long as it does not fit;
 //!
 //! then limited in gradation. Everything else coarsens towards `h_max`
 //! (interior collapses in `resize`), so cells far from every interface in
-//! homogeneous regions are few. The run starts from a mesh at `h_max`
-//! (coarse to fine): the initialisation labels coarse cells, and the first
-//! iterations refine around the interfaces and the unexplained detail.
+//! homogeneous regions are few. The run starts from the uniform mesh at `L`
+//! and coarsens, or (`coarse_start`) from a mesh at `h_max` and refines
+//! around the interfaces and the unexplained detail (coarse to fine).
 
 use super::integrate::{CellStats, PhaseStats};
 use super::SegmentError;
@@ -44,6 +48,11 @@ pub struct SizingParams {
     /// A cell's excess residual must exceed this many standard deviations
     /// of the noise's residual to ask for refinement.
     pub residual_sigmas: f64,
+    /// Whether the run starts from a mesh at `h_max` (coarse to fine) rather
+    /// than at `L`: the initialisation then labels coarse cells, and detail
+    /// smaller than them must be found again by refinement.
+    #[serde(default)]
+    pub coarse_start: bool,
 }
 
 impl Default for SizingParams {
@@ -52,8 +61,9 @@ impl Default for SizingParams {
             adaptive: false,
             min_edge_length: None,
             max_edge_length: None,
-            gradation: 0.5,
+            gradation: 1.0,
             residual_sigmas: 5.0,
+            coarse_start: false,
         }
     }
 }
@@ -73,8 +83,10 @@ pub struct Sizes {
     pub h_min: f64,
     /// Target edge length at interfaces (`L`).
     pub interface: f64,
-    /// Largest target edge length (also the initial mesh's).
+    /// Largest target edge length.
     pub h_max: f64,
+    /// Edge length of the initial mesh (`L`, or `h_max` for a coarse start).
+    pub start: f64,
 }
 
 impl SizingParams {
@@ -87,10 +99,12 @@ impl SizingParams {
             .min_edge_length
             .unwrap_or(DEFAULT_MIN_EDGE_LENGTH)
             .min(l);
+        let h_max = h_max.min(extent);
         Sizes {
             h_min,
             interface: l,
-            h_max: h_max.min(extent),
+            h_max,
+            start: if self.coarse_start { h_max } else { l },
         }
     }
 
@@ -185,21 +199,24 @@ impl AdaptiveSizing {
             let pts = complex.cell_points(c);
             let pts = &pts[..K::NV];
             let centroid = centroid(pts);
-            if complex
+            let on_interface = complex
                 .cell(c)
                 .iter()
-                .any(|&v| complex.class(v).on_interface())
-            {
+                .any(|&v| complex.class(v).on_interface());
+            if on_interface {
                 field.lower(&centroid, self.sizes.interface);
-                continue;
             }
             let Some(stats) = cells.get(c.index()) else {
                 continue;
             };
             if self.unexplained(complex, c, stats, phases, gap, smallest_cell) {
-                let longest = longest_edge(pts);
-                let target = (REFINE_FACTOR * longest).max(self.sizes.h_min);
-                self.requests.lower(&centroid, target);
+                let target = (REFINE_FACTOR * longest_edge(pts)).max(self.sizes.h_min);
+                if on_interface {
+                    // Where the interface is, for now: it may be moving.
+                    field.lower(&centroid, target);
+                } else {
+                    self.requests.lower(&centroid, target);
+                }
                 self.last_requests += 1;
             }
         }

@@ -298,10 +298,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let dsc = DscParams::new::<K>(l);
         let given = preset.is_some();
         let sizes = (params.sizing.adaptive).then(|| params.sizing.sizes(&image.dims[..K::N], l));
-        // Adaptive runs start coarse: the first iterations refine.
         let mut complex = match preset {
             Some(c) => c,
-            None => K::box_complex(&image, sizes.map_or(l, |s| s.h_max))?,
+            None => K::box_complex(&image, sizes.map_or(l, |s| s.start))?,
         };
         let adaptive = sizes.map(|sizes| {
             let (lo, hi) = complex.domain();

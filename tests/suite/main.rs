@@ -1,5 +1,6 @@
 //! All integration tests in one binary (one link, shared helpers).
 
+mod adaptive;
 mod batch;
 mod cli;
 mod cli3d;
