@@ -1,6 +1,8 @@
 //! One iteration of the 3D segmentation (integrate, flips, forces, deform) on
 //! the 128³ two-balls phantom at the default edge length, after a few warm-up
-//! iterations so the interface sits near the objects. Prints the tet count.
+//! iterations so the interface sits near the objects: with the uniform mesh,
+//! and with the adaptive one started coarse (`--adaptive --coarse-start`).
+//! Prints the tet counts.
 //! Peak memory: run the `segment3d` command under `/usr/bin/time -v`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -11,28 +13,38 @@ use dsc_seg::segment::{ImageView, SegmentParams, Segmentation};
 fn iteration_128(c: &mut Criterion) {
     let n = 128;
     let ph = shapes3d::two_balls(n, 0.1, 1);
-    let view = ImageView::new_3d([n, n, n], &ph.image).unwrap();
-    // Flips on every iteration, so that every measured step is a full one
-    // (the 3D default tries them only every `flip_interval` iterations).
-    let params = SegmentParams {
-        flip_interval: 1,
-        ..SegmentParams::new_3d(2)
-    };
-    let mut seg = Segmentation::<D3>::new(view, params).unwrap();
-    for _ in 0..3 {
-        seg.step();
-    }
-    eprintln!(
-        "128³ two balls: {} tets, {} vertices, L = {}",
-        seg.complex().cell_count(),
-        seg.complex().vertex_count(),
-        seg.dsc_params().edge_length
-    );
     let mut group = c.benchmark_group("segment3d");
     group.sample_size(10);
-    group.bench_function("one iteration, 128³", |b| {
-        b.iter(|| seg.step());
-    });
+    for adaptive in [false, true] {
+        let view = ImageView::new_3d([n, n, n], &ph.image).unwrap();
+        // Flips on every iteration, so that every measured step is a full one
+        // (the 3D default tries them only every `flip_interval` iterations).
+        let mut params = SegmentParams {
+            flip_interval: 1,
+            ..SegmentParams::new_3d(2)
+        };
+        params.sizing.adaptive = adaptive;
+        params.sizing.coarse_start = adaptive;
+        let mut seg = Segmentation::<D3>::new(view, params).unwrap();
+        for _ in 0..3 {
+            seg.step();
+        }
+        let mesh = if adaptive { "adaptive" } else { "uniform" };
+        eprintln!(
+            "128³ two balls, {mesh}: {} tets, {} vertices, L = {}",
+            seg.complex().cell_count(),
+            seg.complex().vertex_count(),
+            seg.dsc_params().edge_length
+        );
+        let name = if adaptive {
+            "one iteration, 128³, adaptive"
+        } else {
+            "one iteration, 128³"
+        };
+        group.bench_function(name, |b| {
+            b.iter(|| seg.step());
+        });
+    }
     group.finish();
 }
 

@@ -15,9 +15,10 @@
 //!   whole run (they mark structure, which does not go away), so a thin line
 //!   or a small blob ends up in cells small enough for the label flips to
 //!   give it its own phase; requests of cells touching an interface hold for
-//!   one iteration (the interface may be passing through), so an interface
-//!   that cannot fit the data at size `L` (a thin line once labelled, a
-//!   sharp corner) is refined for as long as it does not fit;
+//!   one iteration (the interface may be passing through) and must exceed a
+//!   whole pixel layer across the cell (a blurred edge leaves less), so an
+//!   interface that cannot fit the data at size `L` (a thin line once
+//!   labelled, a sharp corner) is refined for as long as it does not fit;
 //!
 //! then limited in gradation. Everything else coarsens towards `h_max`
 //! (interior collapses in `resize`), so cells far from every interface in
@@ -209,8 +210,17 @@ impl AdaptiveSizing {
             let Some(stats) = cells.get(c.index()) else {
                 continue;
             };
-            if self.unexplained(complex, c, stats, phases, gap, smallest_cell) {
-                let target = (REFINE_FACTOR * longest_edge(pts)).max(self.sizes.h_min);
+            let longest = longest_edge(pts);
+            // At an interface, a blurred edge leaves a residual of a fraction
+            // of a pixel's width along the cell: ask for more than a whole
+            // pixel layer across it.
+            let floor = if on_interface {
+                longest.powi(K::N as i32 - 1)
+            } else {
+                smallest_cell
+            };
+            if self.unexplained(complex, c, stats, phases, gap, floor) {
+                let target = (REFINE_FACTOR * longest).max(self.sizes.h_min);
                 if on_interface {
                     // Where the interface is, for now: it may be moving.
                     field.lower(&centroid, target);
@@ -227,7 +237,8 @@ impl AdaptiveSizing {
     }
 
     /// Whether the pixels of `c` deviate from its phase's mean clearly more
-    /// than noise of the estimated variance would.
+    /// than noise of the estimated variance would, by more than `floor`
+    /// pixels labelled across the smallest gap between means.
     fn unexplained<K: Dim>(
         &self,
         complex: &Complex<K>,
@@ -235,7 +246,7 @@ impl AdaptiveSizing {
         stats: &CellStats,
         phases: &PhaseStats,
         gap: f64,
-        smallest_cell: f64,
+        floor: f64,
     ) -> bool {
         let n = stats.count as f64;
         if stats.count < 4 {
@@ -253,7 +264,7 @@ impl AdaptiveSizing {
         let excess = stats.sse(mean) - n * var;
         // The sum of n squared Gaussian residuals has standard deviation
         // σ²·√(2n); a mislabelled smallest cell costs gap²·its pixels.
-        excess > self.residual_sigmas * var * (2.0 * n).sqrt() && excess > gap * gap * smallest_cell
+        excess > self.residual_sigmas * var * (2.0 * n).sqrt() && excess > gap * gap * floor
     }
 }
 
