@@ -15,8 +15,8 @@
 //!   whole run (they mark structure, which does not go away), so a thin line
 //!   or a small blob ends up in cells small enough for the label flips to
 //!   give it its own phase; requests of cells touching an interface hold for
-//!   one iteration (the interface may be passing through) and must exceed a
-//!   whole pixel layer across the cell (a blurred edge leaves less), so an
+//!   one iteration (the interface may be passing through) and, in 2D, must
+//!   exceed a whole pixel layer across the cell (a blurred edge leaves less), so an
 //!   interface that cannot fit the data at size `L` (a thin line once
 //!   labelled, a sharp corner) is refined for as long as it does not fit;
 //!
@@ -211,11 +211,14 @@ impl AdaptiveSizing {
                 continue;
             };
             let longest = longest_edge(pts);
-            // At an interface, a blurred edge leaves a residual of a fraction
-            // of a pixel's width along the cell: ask for more than a whole
-            // pixel layer across it.
-            let floor = if on_interface {
-                longest.powi(K::N as i32 - 1)
+            // At a 2D interface, a blurred edge leaves a residual of a
+            // fraction of a pixel's width along the cell: ask for more than
+            // a whole pixel layer across it (refining for less kept runs at
+            // σ 0.1 from converging). In 3D a layer across a coarse tet's
+            // face is many voxels, and with that bound the coarse-to-fine
+            // start lost accuracy, so 3D asks for a smallest cell.
+            let floor = if on_interface && K::N == 2 {
+                longest
             } else {
                 smallest_cell
             };
