@@ -134,9 +134,9 @@ pub struct SegmentOptions {
     /// Average edge length L of the mesh in pixels [default: min(W,H)/64·sqrt(N-1) clamped to 3..10].
     #[arg(long, allow_hyphen_values = true)]
     pub edge_length: Option<f64>,
-    /// Initialisation.
-    #[arg(long, value_enum, default_value_t = InitKind::Histogram)]
-    pub init: InitKind,
+    /// Initialisation [default: disks when --disk is given, else histogram].
+    #[arg(long, value_enum)]
+    pub init: Option<InitKind>,
     /// A disk for --init disks: X,Y,R in pixels, optionally ,PHASE (default 1). Repeatable.
     #[arg(
         long = "disk",
@@ -160,7 +160,17 @@ impl SegmentOptions {
         let mut params = SegmentParams::new(phase_count(self.phases, default_phases)?);
         params.edge_length = self.edge_length;
         self.evolution.apply(&mut params);
-        params.init = match self.init {
+        let init = match (self.init, self.disks.is_empty()) {
+            (None, false) => InitKind::Disks,
+            (None, true) => InitKind::Histogram,
+            (Some(k), true) | (Some(k @ InitKind::Disks), false) => k,
+            (Some(_), false) => {
+                return Err(Error::Usage(
+                    "--disk is only used by --init disks (or without --init)".into(),
+                ))
+            }
+        };
+        params.init = match init {
             InitKind::Histogram => Init::Histogram,
             InitKind::Range => Init::Range,
             InitKind::Disks => Init::Disks(parse_all(
@@ -185,9 +195,9 @@ pub struct Segment3dOptions {
     /// size) [default: smallest side/64·sqrt(N-1) clamped to 3..10 voxel-sized steps].
     #[arg(long, allow_hyphen_values = true)]
     pub edge_length: Option<f64>,
-    /// Initialisation.
-    #[arg(long, value_enum, default_value_t = Init3Kind::Histogram)]
-    pub init: Init3Kind,
+    /// Initialisation [default: balls when --ball is given, else histogram].
+    #[arg(long, value_enum)]
+    pub init: Option<Init3Kind>,
     /// A ball for --init balls: X,Y,Z,R in the volume's length unit from the corner of voxel 0
     /// (voxels without a voxel size), optionally ,PHASE (default 1). Repeatable.
     #[arg(
@@ -243,7 +253,17 @@ impl Segment3dOptions {
         let mut params = SegmentParams::new_3d(phase_count(Some(self.phases), 2)?);
         params.edge_length = self.edge_length;
         self.evolution.apply(&mut params);
-        params.init = match self.init {
+        let init = match (self.init, self.balls.is_empty()) {
+            (None, false) => Init3Kind::Balls,
+            (None, true) => Init3Kind::Histogram,
+            (Some(k), true) | (Some(k @ Init3Kind::Balls), false) => k,
+            (Some(_), false) => {
+                return Err(Error::Usage(
+                    "--ball is only used by --init balls (or without --init)".into(),
+                ))
+            }
+        };
+        params.init = match init {
             Init3Kind::Histogram => Init::Histogram,
             Init3Kind::Range => Init::Range,
             Init3Kind::Balls => Init::Balls(parse_all(

@@ -361,7 +361,18 @@ pub fn mean_dice(pred: &[u8], truth: &[u8], phases: usize) -> f64 {
 /// Loads (or generates) a 2D input, with the phantom's ground truth.
 pub fn load_image(source: &Source) -> Result<(Image2, Option<GroundTruth>)> {
     match source {
-        Source::File(path) => Ok((Image2::load(path)?, None)),
+        Source::File(path) => {
+            refuse_stacks(path)?;
+            let image = Image2::load(path)?;
+            if is_colour(path) {
+                eprintln!(
+                    "note: {} is a colour image; it is segmented as its luminance \
+                     (Rec. 709 weights of R, G, B)",
+                    path.display()
+                );
+            }
+            Ok((image, None))
+        }
         Source::Phantom {
             name,
             size,
@@ -382,6 +393,40 @@ pub fn load_image(source: &Source) -> Result<(Image2, Option<GroundTruth>)> {
             "an in-memory image has no file to load".into(),
         )),
     }
+}
+
+/// Whether an image file holds colour (RGB/RGBA) samples.
+fn is_colour(path: &Path) -> bool {
+    use image::ImageDecoder as _;
+    image::ImageReader::open(path)
+        .ok()
+        .and_then(|r| r.with_guessed_format().ok())
+        .and_then(|r| r.into_decoder().ok())
+        .is_some_and(|d| d.color_type().has_color())
+}
+
+/// A multi-page TIFF is a volume: `segment` would read its first page only.
+fn refuse_stacks(path: &Path) -> Result<()> {
+    if !crate::io::resolution::is_tiff(path) {
+        return Ok(());
+    }
+    let Ok(file) = std::fs::File::open(path) else {
+        return Ok(()); // the loader reports it
+    };
+    let Ok(mut dec) = tiff::decoder::Decoder::new(std::io::BufReader::new(file)) else {
+        return Ok(());
+    };
+    let mut pages = 1usize;
+    while dec.more_images() && dec.next_image().is_ok() {
+        pages += 1;
+    }
+    if pages > 1 {
+        return Err(Error::Usage(format!(
+            "{} has {pages} pages: a multi-page TIFF is a volume, segment it with `dsc-seg segment3d`",
+            path.display()
+        )));
+    }
+    Ok(())
 }
 
 /// `params` with the labels of `Init::Labels` loaded from `init_labels`

@@ -299,7 +299,7 @@ impl Segmented {
                 .map(|c| [c[0], c[1], c[2]])
                 .collect();
             let phase: Vec<u32> = self.cell_phases.iter().map(|&p| p as u32).collect();
-            let overlay = Overlay::new(image, &points, &tris, &phase);
+            let overlay = Overlay::new(image, &points, &tris, &phase).readable();
             overlay.to_png(path("overlay.png"))?;
             overlay.to_svg(path("overlay.svg"))?;
         }

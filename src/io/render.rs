@@ -14,6 +14,11 @@
 //! of its two phases ([`phase_color`]), over a thin dark halo so that it reads
 //! on both bright and dark image regions; with phase 0 as background, every
 //! object is thus outlined in its own colour.
+//!
+//! [`Overlay::readable`] (the command line's `overlay.png`) adds translucent
+//! phase fills, draws each interface as two strokes in the colours of its two
+//! phases, and a legend (swatches with the phase numbers); the default scale
+//! keeps the longest side at most 2048 px.
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -46,6 +51,10 @@ const PALETTE: [[u8; 3]; 10] = [
 
 /// Output width the default scale aims for (at least), in pixels.
 const TARGET_WIDTH: f32 = 768.0;
+
+/// The longest side the default scale allows, in output pixels: a long
+/// thin image is shrunk to fit rather than blown up to its width's scale.
+const MAX_SIDE: f32 = 2048.0;
 
 /// The display colour (sRGB) of a phase, shared by all figures so that a
 /// phase has the same colour everywhere.
@@ -123,6 +132,15 @@ pub struct Overlay<'a> {
     pub mesh_width: Option<f32>,
     /// Opacity of the (white) mesh lines (default 0.35).
     pub mesh_alpha: f32,
+    /// Opacity of the phase colour filling each triangle (default 0: none).
+    pub fill_alpha: f32,
+    /// Whether each interface is drawn as two strokes side by side, each
+    /// in the colour of the phase on its side (default: one stroke in the
+    /// higher phase's colour).
+    pub two_sided: bool,
+    /// Whether to draw a legend (a swatch and the number of each phase)
+    /// in the top-left corner.
+    pub legend: bool,
 }
 
 impl<'a> Overlay<'a> {
@@ -135,17 +153,33 @@ impl<'a> Overlay<'a> {
         labels: &'a [u32],
     ) -> Self {
         let w = image.width().max(1) as f32;
+        let longest = image.width().max(image.height()).max(1) as f32;
         Overlay {
             image,
             points,
             triangles,
             labels,
-            scale: (TARGET_WIDTH / w).ceil().max(1.0),
+            scale: (TARGET_WIDTH / w).ceil().max(1.0).min(MAX_SIDE / longest),
             draw_mesh: true,
             line_width: 3.0,
             mesh_width: None,
             mesh_alpha: 0.35,
+            fill_alpha: 0.0,
+            two_sided: false,
+            legend: false,
         }
+    }
+
+    /// The style of the command line's `overlay.png`: translucent phase
+    /// fills under the interfaces, each interface in both of its phases'
+    /// colours, a legend, and a thinner mesh.
+    pub fn readable(mut self) -> Self {
+        self.fill_alpha = 0.35;
+        self.two_sided = true;
+        self.legend = true;
+        self.line_width = 4.0;
+        self.mesh_alpha = 0.2;
+        self
     }
 
     /// Sets [`Overlay::scale`].
@@ -225,6 +259,7 @@ impl<'a> Overlay<'a> {
             }
         }
         let t = Transform::from_scale(self.scale, self.scale);
+        self.fill_phases(&mut pixmap, t);
         for layer in self.layers() {
             let mut pb = PathBuilder::new();
             for [a, b] in &layer.segments {
@@ -245,6 +280,9 @@ impl<'a> Overlay<'a> {
                 ..Stroke::default()
             };
             pixmap.stroke_path(&path, &paint, &stroke, t, None);
+        }
+        if self.legend {
+            self.draw_legend(&mut pixmap);
         }
         let mut out = RgbaImage::new(w, h);
         for (dst, src) in out.pixels_mut().zip(pixmap.pixels()) {
@@ -300,6 +338,30 @@ impl<'a> Overlay<'a> {
              xlink:href=\"data:image/png;base64,{}\"/>\n",
             base64(&png)
         );
+        if self.fill_alpha > 0.0 {
+            for phase in self.phases() {
+                let [r, g, b] = phase_color(phase);
+                let _ = write!(
+                    svg,
+                    "<path stroke=\"none\" fill=\"#{r:02x}{g:02x}{b:02x}\" fill-opacity=\"{}\" d=\"",
+                    self.fill_alpha
+                );
+                for (tri, _) in self
+                    .triangles
+                    .iter()
+                    .zip(self.labels)
+                    .filter(|(_, &l)| l == phase)
+                {
+                    let [a, b, c] = tri.map(|i| self.points[i as usize]);
+                    let _ = write!(
+                        svg,
+                        "M{:.3} {:.3}L{:.3} {:.3}L{:.3} {:.3}Z",
+                        a[0], a[1], b[0], b[1], c[0], c[1]
+                    );
+                }
+                svg.push_str("\"/>\n");
+            }
+        }
         for layer in self.layers() {
             let [r, g, b] = layer.rgb;
             let _ = write!(
@@ -313,6 +375,9 @@ impl<'a> Overlay<'a> {
                 let _ = write!(svg, "M{:.3} {:.3}L{:.3} {:.3}", a[0], a[1], b[0], b[1]);
             }
             svg.push_str("\"/>\n");
+        }
+        if self.legend {
+            self.svg_legend(&mut svg);
         }
         svg.push_str("</svg>\n");
         write_bytes_atomic(path, svg.as_bytes())
@@ -337,6 +402,19 @@ impl<'a> Overlay<'a> {
         }
         let iface = interface_edges(self.triangles, self.labels);
         if iface.is_empty() {
+            return layers;
+        }
+        if self.two_sided {
+            layers.push(Layer {
+                rgb: [0, 0, 0],
+                alpha: 0.55,
+                width: self.line_width + 2.0,
+                segments: iface
+                    .iter()
+                    .map(|e| [p(e.vertices[0]), p(e.vertices[1])])
+                    .collect(),
+            });
+            layers.extend(self.sided_layers());
             return layers;
         }
         layers.push(Layer {
@@ -367,6 +445,226 @@ impl<'a> Overlay<'a> {
             });
         }
         layers
+    }
+}
+
+impl Overlay<'_> {
+    /// The phases present, in increasing order.
+    fn phases(&self) -> Vec<u32> {
+        let mut phases = self.labels.to_vec();
+        phases.sort_unstable();
+        phases.dedup();
+        phases
+    }
+
+    /// Fills every triangle with its phase's colour at [`Overlay::fill_alpha`]:
+    /// one path per phase, so shared edges inside a phase leave no seam.
+    fn fill_phases(&self, pixmap: &mut Pixmap, t: Transform) {
+        if self.fill_alpha <= 0.0 {
+            return;
+        }
+        for phase in self.phases() {
+            let mut pb = PathBuilder::new();
+            for (tri, _) in self
+                .triangles
+                .iter()
+                .zip(self.labels)
+                .filter(|(_, &l)| l == phase)
+            {
+                let [a, b, c] = tri.map(|i| self.points[i as usize]);
+                pb.move_to(a[0] as f32, a[1] as f32);
+                pb.line_to(b[0] as f32, b[1] as f32);
+                pb.line_to(c[0] as f32, c[1] as f32);
+                pb.close();
+            }
+            let Some(path) = pb.finish() else { continue };
+            let mut paint = Paint::default();
+            let [r, g, b] = phase_color(phase);
+            paint.set_color_rgba8(r, g, b, (self.fill_alpha * 255.0).round() as u8);
+            pixmap.fill_path(&path, &paint, tiny_skia::FillRule::Winding, t, None);
+        }
+    }
+
+    /// One layer per phase: each interface edge shifted a quarter of the
+    /// line width into each of its two triangles, in that triangle's colour.
+    fn sided_layers(&self) -> Vec<Layer> {
+        let shift = f64::from(self.line_width) / 4.0 / f64::from(self.scale);
+        let mut sides: HashMap<[u32; 2], (u32, Option<u32>)> = HashMap::new();
+        for (t, &l) in self.triangles.iter().zip(self.labels) {
+            for e in tri_edges(t) {
+                sides
+                    .entry(e)
+                    .and_modify(|s| s.1 = Some(l))
+                    .or_insert((l, None));
+            }
+        }
+        let mut by_phase: Vec<(u32, Vec<[[f64; 2]; 2]>)> = Vec::new();
+        for (t, &l) in self.triangles.iter().zip(self.labels) {
+            for (k, e) in tri_edges(t).into_iter().enumerate() {
+                match sides.get(&e) {
+                    Some(&(a, Some(b))) if a != b => {}
+                    _ => continue,
+                }
+                let [a, b] = e.map(|i| self.points[i as usize]);
+                // The corner opposite edge k of `tri_edges` is t[(k + 2) % 3].
+                let c = self.points[t[(k + 2) % 3] as usize];
+                let Some(seg) = shifted_towards(a, b, c, shift) else {
+                    continue;
+                };
+                match by_phase.iter_mut().find(|(q, _)| *q == l) {
+                    Some((_, v)) => v.push(seg),
+                    None => by_phase.push((l, vec![seg])),
+                }
+            }
+        }
+        by_phase.sort_by_key(|(ph, _)| *ph);
+        by_phase
+            .into_iter()
+            .map(|(ph, segments)| Layer {
+                rgb: phase_color(ph),
+                alpha: 1.0,
+                width: self.line_width / 2.0,
+                segments,
+            })
+            .collect()
+    }
+
+    /// The legend's boxes in output pixels: per phase present, its swatch
+    /// `(phase, x, y, side)`, on a panel `(x, y, w, h)`.
+    fn legend_layout(&self) -> (Vec<(u32, f32, f32, f32)>, [f32; 4]) {
+        let phases = self.phases();
+        let (side, gap, pad) = (18.0f32, 6.0f32, 6.0f32);
+        let digits = phases
+            .iter()
+            .map(|p| p.to_string().len())
+            .max()
+            .unwrap_or(1) as f32;
+        let width = pad * 2.0 + side + gap + digits * (side * 0.6 + 3.0);
+        let height = pad * 2.0 + phases.len() as f32 * (side + gap) - gap;
+        let boxes = phases
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| (p, pad + pad, pad + pad + i as f32 * (side + gap), side))
+            .collect();
+        (boxes, [pad, pad, width, height])
+    }
+
+    /// Draws the legend: a light panel, a swatch per phase and its number
+    /// (seven-segment strokes, no font needed).
+    fn draw_legend(&self, pixmap: &mut Pixmap) {
+        let (boxes, [px, py, pw, ph]) = self.legend_layout();
+        let fill = |pixmap: &mut Pixmap, rect: [f32; 4], rgba: [u8; 4]| {
+            if let Some(r) = tiny_skia::Rect::from_xywh(rect[0], rect[1], rect[2], rect[3]) {
+                let mut paint = Paint::default();
+                paint.set_color_rgba8(rgba[0], rgba[1], rgba[2], rgba[3]);
+                pixmap.fill_rect(r, &paint, Transform::identity(), None);
+            }
+        };
+        fill(pixmap, [px, py, pw, ph], [255, 255, 255, 220]);
+        for (phase, x, y, side) in boxes {
+            let [r, g, b] = phase_color(phase);
+            fill(
+                pixmap,
+                [x - 1.0, y - 1.0, side + 2.0, side + 2.0],
+                [0, 0, 0, 255],
+            );
+            fill(pixmap, [x, y, side, side], [r, g, b, 255]);
+            let mut pb = PathBuilder::new();
+            let mut dx = x + side + 6.0;
+            for ch in phase.to_string().chars() {
+                seven_segment(&mut pb, ch, dx, y + 2.0, side * 0.5, side - 4.0);
+                dx += side * 0.6 + 3.0;
+            }
+            if let Some(path) = pb.finish() {
+                let mut paint = Paint::default();
+                paint.set_color_rgba8(0, 0, 0, 255);
+                paint.anti_alias = true;
+                let stroke = Stroke {
+                    width: 2.0,
+                    line_cap: LineCap::Round,
+                    ..Stroke::default()
+                };
+                pixmap.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+            }
+        }
+    }
+}
+
+impl Overlay<'_> {
+    /// The legend as SVG rectangles and text, in image units.
+    fn svg_legend(&self, svg: &mut String) {
+        let s = self.scale;
+        let (boxes, [px, py, pw, ph]) = self.legend_layout();
+        let _ = writeln!(
+            svg,
+            "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"#ffffff\" fill-opacity=\"0.86\"/>",
+            px / s,
+            py / s,
+            pw / s,
+            ph / s
+        );
+        for (phase, x, y, side) in boxes {
+            let [r, g, b] = phase_color(phase);
+            let _ = writeln!(
+                svg,
+                "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"#{r:02x}{g:02x}{b:02x}\" \
+                 stroke=\"#000000\" stroke-width=\"{}\"/>\n<text x=\"{}\" y=\"{}\" \
+                 font-family=\"sans-serif\" font-size=\"{}\">{phase}</text>",
+                x / s,
+                y / s,
+                side / s,
+                side / s,
+                1.0 / s,
+                (x + side + 6.0) / s,
+                (y + side - 2.0) / s,
+                side / s
+            );
+        }
+    }
+}
+
+/// The segment `a`–`b` moved by `shift` perpendicular to itself, towards
+/// `c`; `None` for a degenerate segment.
+fn shifted_towards(a: [f64; 2], b: [f64; 2], c: [f64; 2], shift: f64) -> Option<[[f64; 2]; 2]> {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len = (dx * dx + dy * dy).sqrt();
+    if len == 0.0 {
+        return None;
+    }
+    let mut n = [-dy / len, dx / len];
+    if n[0] * (c[0] - a[0]) + n[1] * (c[1] - a[1]) < 0.0 {
+        n = [-n[0], -n[1]];
+    }
+    Some([
+        [a[0] + n[0] * shift, a[1] + n[1] * shift],
+        [b[0] + n[0] * shift, b[1] + n[1] * shift],
+    ])
+}
+
+/// Adds the strokes of digit `ch` as a seven-segment figure of size `w × h`
+/// with its top-left corner at `(x, y)`.
+fn seven_segment(pb: &mut PathBuilder, ch: char, x: f32, y: f32, w: f32, h: f32) {
+    // Segments a..g: top, top right, bottom right, bottom, bottom left, top left, middle.
+    const ON: [u8; 10] = [
+        0b0111111, 0b0000110, 0b1011011, 0b1001111, 0b1100110, 0b1101101, 0b1111101, 0b0000111,
+        0b1111111, 0b1101111,
+    ];
+    let Some(d) = ch.to_digit(10) else { return };
+    let m = h / 2.0;
+    let ends = [
+        ((0.0, 0.0), (w, 0.0)),
+        ((w, 0.0), (w, m)),
+        ((w, m), (w, h)),
+        ((0.0, h), (w, h)),
+        ((0.0, m), (0.0, h)),
+        ((0.0, 0.0), (0.0, m)),
+        ((0.0, m), (w, m)),
+    ];
+    for (bit, ((x0, y0), (x1, y1))) in ends.iter().enumerate() {
+        if ON[d as usize] >> bit & 1 == 1 {
+            pb.move_to(x + x0, y + y0);
+            pb.line_to(x + x1, y + y1);
+        }
     }
 }
 
@@ -439,6 +737,65 @@ pub fn save_gif(path: impl AsRef<Path>, frames: &[RgbaImage], delay_ms: u32) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A 40 × 40 gray image and a 3 × 3-vertex mesh: phase 0 left of
+    /// x = 20, phase 1 right of it.
+    fn halves() -> (Image2, Vec<[f64; 2]>, Vec<[u32; 3]>, Vec<u32>) {
+        let image = Image2::from_fn(40, 40, |_, _| 0.5);
+        let points: Vec<[f64; 2]> = (0..9)
+            .map(|i| [20.0 * (i % 3) as f64, 20.0 * (i / 3) as f64])
+            .collect();
+        let mut tris = Vec::new();
+        let mut labels = Vec::new();
+        for (cx, cy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let v = |dx: u32, dy: u32| (cy + dy) * 3 + cx + dx;
+            tris.push([v(0, 0), v(1, 0), v(1, 1)]);
+            tris.push([v(0, 0), v(1, 1), v(0, 1)]);
+            labels.extend([cx, cx]);
+        }
+        (image, points, tris, labels)
+    }
+
+    #[test]
+    fn readable_overlay_has_fills_two_coloured_interfaces_and_a_legend() {
+        let (image, points, tris, labels) = halves();
+        let img = Overlay::new(&image, &points, &tris, &labels)
+            .readable()
+            .with_mesh(false)
+            .with_scale(8.0)
+            .to_rgba_image();
+        let px = |x: u32, y: u32| img.get_pixel(x, y).0;
+        let blend = |c: [u8; 3]| c.map(|v| (0.65 * 128.0 + 0.35 * f64::from(v)).round() as i32);
+        let near = |p: [u8; 4], q: [i32; 3]| (0..3).all(|k| (i32::from(p[k]) - q[k]).abs() <= 2);
+        // Fills: each half is its phase's colour over the gray, translucent.
+        assert!(
+            near(px(80, 240), blend(phase_color(0))),
+            "{:?}",
+            px(80, 240)
+        );
+        assert!(
+            near(px(240, 240), blend(phase_color(1))),
+            "{:?}",
+            px(240, 240)
+        );
+        // The interface x = 20 (output 160): phase 0's colour on its left,
+        // phase 1's on its right.
+        let c = |p: u32| phase_color(p);
+        assert_eq!(&px(159, 200)[..3], &c(0)[..]);
+        assert_eq!(&px(160, 200)[..3], &c(1)[..]);
+        // The legend: a swatch per phase in the top-left corner.
+        assert_eq!(&px(20, 20)[..3], &c(0)[..]);
+        assert_eq!(&px(20, 44)[..3], &c(1)[..]);
+    }
+
+    #[test]
+    fn a_long_thin_image_gives_a_capped_overlay() {
+        let image = Image2::from_fn(50, 2000, |_, _| 0.5);
+        let ov = Overlay::new(&image, &[], &[], &[]);
+        let (w, h) = ov.output_size();
+        assert!(w.max(h) <= 2048, "{w}x{h}");
+        assert_eq!(h, 2048);
+    }
 
     /// A 64×64 test scene: a two-disk image with a faint texture, an 8×8 grid of squares
     /// split into triangles, labelled 1/2 inside the disks and 0 outside.

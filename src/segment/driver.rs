@@ -283,6 +283,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             ));
         }
         params.validate_dims(image.dims)?;
+        params.check_shapes_inside(image.extent())?;
         let range = image.range().ok_or(SegmentError::NonFinite)?;
         if range.1 - range.0 <= 0.0 {
             return Err(SegmentError::ConstantImage(range.0));

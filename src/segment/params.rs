@@ -420,6 +420,40 @@ impl SegmentParams {
         Ok(())
     }
 
+    /// Checks that every disk or ball of the initialisation overlaps the
+    /// domain `[0, extent]` (the image's size in the complex's units): one
+    /// outside would label nothing and leave a silent all-background start.
+    pub fn check_shapes_inside(&self, extent: [f64; 3]) -> Result<(), SegmentError> {
+        let overlaps = |centre: &[f64], r: f64| {
+            let d2: f64 = centre
+                .iter()
+                .zip(extent)
+                .map(|(&c, e)| (c - c.clamp(0.0, e)).powi(2))
+                .sum();
+            d2 < r * r
+        };
+        match &self.init {
+            Init::Disks(disks) => {
+                if let Some(d) = disks.iter().find(|d| !overlaps(&[d.x, d.y], d.r)) {
+                    return Err(SegmentError::Init(format!(
+                        "disk {},{},{} lies outside the {}×{} image",
+                        d.x, d.y, d.r, extent[0], extent[1]
+                    )));
+                }
+            }
+            Init::Balls(balls) => {
+                if let Some(b) = balls.iter().find(|b| !overlaps(&b.centre, b.r)) {
+                    return Err(SegmentError::Init(format!(
+                        "ball {},{},{},{} lies outside the volume [0, {}]×[0, {}]×[0, {}]",
+                        b.centre[0], b.centre[1], b.centre[2], b.r, extent[0], extent[1], extent[2]
+                    )));
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
     /// The edge length to use for an image or volume of `dims` samples of
     /// size `spacing`, in the same length unit: the given one, or the
     /// default of [`resolved_edge_length`](Self::resolved_edge_length)

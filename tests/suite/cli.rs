@@ -624,3 +624,55 @@ fn help_and_parse_errors() {
         "error: the following required arguments were not provided: --out <OUT> (see --help)"
     );
 }
+
+#[test]
+fn disks_imply_their_init_and_must_touch_the_image() {
+    let d = tmp();
+    let img = write_image(d.path(), 32, 32);
+    let img = img.to_str().unwrap();
+    let out = empty_out(&d);
+    fails(&SEGMENT, &[img, "--disk", "100,100,5"], &out, "outside");
+    fails(&SEGMENT, &[img, "--init", "range", "--disk", "16,16,6"], &out, "--init disks");
+    // --disk alone starts from the disk.
+    let o = bin()
+        .args(["segment", img, "--disk", "16,16,6", "--max-iterations", "3"])
+        .args(["--quiet", "--outputs", "report", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report = std::fs::read_to_string(out.join("report.json")).unwrap();
+    let report: serde_json::Value = serde_json::from_str(&report).unwrap();
+    assert!(report["params"]["init"].get("disks").is_some(), "{}", report["params"]["init"]);
+}
+
+#[test]
+fn a_tiff_stack_given_to_segment_points_to_segment3d() {
+    let d = tmp();
+    let p = d.path().join("stack.tif");
+    let data: Vec<u8> = (0..3 * 16 * 16).map(|i| (i % 7 * 30) as u8).collect();
+    dsc_seg::io::save_labels_tiff(&p, [16, 16, 3], &data, None).unwrap();
+    fails(&SEGMENT, &[p.to_str().unwrap()], &empty_out(&d), "segment3d");
+}
+
+#[test]
+fn a_colour_image_is_said_to_be_segmented_as_its_luminance() {
+    let d = tmp();
+    let p = d.path().join("rgb.png");
+    image::RgbImage::from_fn(32, 32, |x, y| {
+        let inside = (x as i32 - 16).pow(2) + (y as i32 - 16).pow(2) < 64;
+        let noise = ((x * 7 + y * 13) % 11) as u8 * 3;
+        image::Rgb(if inside { [200, 60 + noise, 40] } else { [30, 90 + noise, 160] })
+    })
+    .save(&p)
+    .unwrap();
+    let o = bin()
+        .arg("segment")
+        .arg(&p)
+        .args(["--max-iterations", "3", "--quiet", "--outputs", "labels", "--out"])
+        .arg(empty_out(&d))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("luminance"));
+}
