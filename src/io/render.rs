@@ -531,7 +531,7 @@ impl Overlay<'_> {
 
     /// The legend's boxes in output pixels: per phase present, its swatch
     /// `(phase, x, y, side)`, on a panel `(x, y, w, h)`.
-    fn legend_layout(&self) -> (Vec<(u32, f32, f32, f32)>, [f32; 4]) {
+    fn legend_layout(&self) -> (Vec<Swatch>, [f32; 4]) {
         let phases = self.phases();
         let (side, gap, pad) = (18.0f32, 6.0f32, 6.0f32);
         let digits = phases
@@ -668,6 +668,9 @@ fn seven_segment(pb: &mut PathBuilder, ch: char, x: f32, y: f32, w: f32, h: f32)
     }
 }
 
+/// A legend swatch: phase, top-left corner and side, in output pixels.
+type Swatch = (u32, f32, f32, f32);
+
 /// A set of line segments stroked with one style.
 struct Layer {
     rgb: [u8; 3],
@@ -738,9 +741,11 @@ pub fn save_gif(path: impl AsRef<Path>, frames: &[RgbaImage], delay_ms: u32) -> 
 mod tests {
     use super::*;
 
+    type Points = Vec<[f64; 2]>;
+
     /// A 40 × 40 gray image and a 3 × 3-vertex mesh: phase 0 left of
     /// x = 20, phase 1 right of it.
-    fn halves() -> (Image2, Vec<[f64; 2]>, Vec<[u32; 3]>, Vec<u32>) {
+    fn halves() -> (Image2, Points, Vec<[u32; 3]>, Vec<u32>) {
         let image = Image2::from_fn(40, 40, |_, _| 0.5);
         let points: Vec<[f64; 2]> = (0..9)
             .map(|i| [20.0 * (i % 3) as f64, 20.0 * (i / 3) as f64])

@@ -632,7 +632,12 @@ fn disks_imply_their_init_and_must_touch_the_image() {
     let img = img.to_str().unwrap();
     let out = empty_out(&d);
     fails(&SEGMENT, &[img, "--disk", "100,100,5"], &out, "outside");
-    fails(&SEGMENT, &[img, "--init", "range", "--disk", "16,16,6"], &out, "--init disks");
+    fails(
+        &SEGMENT,
+        &[img, "--init", "range", "--disk", "16,16,6"],
+        &out,
+        "--init disks",
+    );
     // --disk alone starts from the disk.
     let o = bin()
         .args(["segment", img, "--disk", "16,16,6", "--max-iterations", "3"])
@@ -643,7 +648,11 @@ fn disks_imply_their_init_and_must_touch_the_image() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let report = std::fs::read_to_string(out.join("report.json")).unwrap();
     let report: serde_json::Value = serde_json::from_str(&report).unwrap();
-    assert!(report["params"]["init"].get("disks").is_some(), "{}", report["params"]["init"]);
+    assert!(
+        report["params"]["init"].get("disks").is_some(),
+        "{}",
+        report["params"]["init"]
+    );
 }
 
 #[test]
@@ -652,7 +661,12 @@ fn a_tiff_stack_given_to_segment_points_to_segment3d() {
     let p = d.path().join("stack.tif");
     let data: Vec<u8> = (0..3 * 16 * 16).map(|i| (i % 7 * 30) as u8).collect();
     dsc_seg::io::save_labels_tiff(&p, [16, 16, 3], &data, None).unwrap();
-    fails(&SEGMENT, &[p.to_str().unwrap()], &empty_out(&d), "segment3d");
+    fails(
+        &SEGMENT,
+        &[p.to_str().unwrap()],
+        &empty_out(&d),
+        "segment3d",
+    );
 }
 
 #[test]
@@ -662,14 +676,25 @@ fn a_colour_image_is_said_to_be_segmented_as_its_luminance() {
     image::RgbImage::from_fn(32, 32, |x, y| {
         let inside = (x as i32 - 16).pow(2) + (y as i32 - 16).pow(2) < 64;
         let noise = ((x * 7 + y * 13) % 11) as u8 * 3;
-        image::Rgb(if inside { [200, 60 + noise, 40] } else { [30, 90 + noise, 160] })
+        image::Rgb(if inside {
+            [200, 60 + noise, 40]
+        } else {
+            [30, 90 + noise, 160]
+        })
     })
     .save(&p)
     .unwrap();
     let o = bin()
         .arg("segment")
         .arg(&p)
-        .args(["--max-iterations", "3", "--quiet", "--outputs", "labels", "--out"])
+        .args([
+            "--max-iterations",
+            "3",
+            "--quiet",
+            "--outputs",
+            "labels",
+            "--out",
+        ])
         .arg(empty_out(&d))
         .output()
         .unwrap();
