@@ -128,9 +128,15 @@ pub enum Init3Kind {
 /// The options of a 2D segmentation (everything but the input and outputs).
 #[derive(Args, Clone, Debug)]
 pub struct SegmentOptions {
-    /// Number of phases N, 2..=64 [default: 2, or the phantom's].
-    #[arg(long, allow_hyphen_values = true)]
-    pub phases: Option<i64>,
+    /// Number of phases N, 2..=64, or `auto`: chosen from the data (the
+    /// largest count up to --max-phases whose phases are all regions of their
+    /// own mean: none empty, none duplicating another's mean within the noise,
+    /// none a band along edges) [default: 2, or the phantom's].
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_phases)]
+    pub phases: Option<PhaseCount>,
+    /// Largest number of phases tried by --phases auto.
+    #[arg(long, default_value_t = crate::segment::auto::DEFAULT_MAX_PHASES)]
+    pub max_phases: usize,
     /// Average edge length L of the mesh in pixels [default: min(W,H)/64·sqrt(N-1) clamped to 3..10].
     #[arg(long, allow_hyphen_values = true)]
     pub edge_length: Option<f64>,
@@ -157,7 +163,13 @@ impl SegmentOptions {
     /// when `--phases` is absent. `--init labels` yields empty labels, which
     /// the pipeline loads from `--init-labels` once it knows the image size.
     pub fn params(&self, default_phases: usize) -> Result<SegmentParams> {
-        let mut params = SegmentParams::new(phase_count(self.phases, default_phases)?);
+        let (given, auto) = match self.phases {
+            Some(PhaseCount::Auto) => (None, Some(self.max_phases)),
+            Some(PhaseCount::Count(n)) => (Some(n), None),
+            None => (None, None),
+        };
+        let mut params = SegmentParams::new(phase_count(given, default_phases)?);
+        params.auto_phases = auto;
         params.edge_length = self.edge_length;
         self.evolution.apply(&mut params);
         let init = match (self.init, self.disks.is_empty()) {
@@ -276,6 +288,25 @@ impl Segment3dOptions {
         };
         Ok(params)
     }
+}
+
+/// A `--phases` value: a count, or `auto`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhaseCount {
+    /// This many phases.
+    Count(i64),
+    /// Chosen from the data.
+    Auto,
+}
+
+fn parse_phases(s: &str) -> std::result::Result<PhaseCount, String> {
+    if s.trim().eq_ignore_ascii_case("auto") {
+        return Ok(PhaseCount::Auto);
+    }
+    s.trim()
+        .parse::<i64>()
+        .map(PhaseCount::Count)
+        .map_err(|_| format!("{s:?} is neither a number of phases nor auto"))
 }
 
 /// The number of phases, `default` when not given.

@@ -12,6 +12,7 @@ use crate::io::intensity::IntensityMap;
 use crate::io::resolution::image_frame;
 use crate::io::{save_gray8_png, Frame, Image2, Overlay, SampleType};
 use crate::phantom::{self, Phantom2Kind};
+use crate::segment::auto::{choose_phases, PhaseChoice};
 use crate::segment::measurements::Measurements;
 use crate::segment::{ImageView, Init, Raster, SegmentParams, SegmentReport, Segmentation};
 use crate::segmented::{Outputs, Render, Segmented};
@@ -181,6 +182,8 @@ struct Report<'a> {
     width: usize,
     height: usize,
     input: InputSummary,
+    /// The trials of `--phases auto`.
+    phase_choice: Option<PhaseChoice>,
 }
 
 /// The input's sample type and its intensities in the file's own units (the
@@ -489,6 +492,16 @@ pub(crate) fn segment_image_then<T>(
     let view = ImageView::new_2d(w, h, image.data())
         .ok_or_else(|| Error::Usage("image buffer does not match its size".into()))?;
     let t_seg = Instant::now();
+    let mut params = params;
+    let phase_choice = match params.auto_phases {
+        Some(max) => {
+            params.validate(w, h)?;
+            let choice = choose_phases::<D2>(view, max, |n| params.with_phases(n))?;
+            params = params.with_phases(choice.phases);
+            Some(choice)
+        }
+        None => None,
+    };
     let mut seg = Segmentation::<D2>::new(view, params.clone())?;
     let ready = ready()?;
 
@@ -520,6 +533,7 @@ pub(crate) fn segment_image_then<T>(
         width: w,
         height: h,
         input,
+        phase_choice,
     };
     let mut report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
     let frame = match &provenance.source {

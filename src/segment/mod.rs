@@ -14,6 +14,7 @@
 //! - [`forces`]: region forces (eqs. 5–7) and rigidity (eq. 2);
 //! - `force_stage`: an iteration's force terms summed, its step and the
 //!   destinations of the deformation;
+//! - [`auto`]: the number of phases chosen from the data (`--phases auto`);
 //! - [`flips`]: label flips (mean rule, pixel-dominant rule);
 //! - [`reseed`]: phases that empty or duplicate another, found and re-seeded;
 //! - [`model`]: the extension points ([`ForceTerm`], [`LabelRule`],
@@ -29,6 +30,7 @@
 //!   closed surface, built with TetGen.
 
 pub mod adaptive;
+pub mod auto;
 pub mod driver;
 pub mod error;
 pub mod flips;

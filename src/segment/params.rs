@@ -109,6 +109,11 @@ pub struct InitBall {
 pub struct SegmentParams {
     /// Number of phases `N` (2..=64).
     pub phases: usize,
+    /// When set, the pipelines choose the number of phases from the data,
+    /// trying 2 up to this many ([`choose_phases`](super::auto::choose_phases)),
+    /// and run with the chosen one (written into `phases`).
+    #[serde(default)]
+    pub auto_phases: Option<usize>,
     /// Average edge length `L` of the DSC in pixels. `None` picks
     /// [`default_edge_length`] from the image size.
     pub edge_length: Option<f64>,
@@ -200,6 +205,7 @@ impl SegmentParams {
     pub fn new(phases: usize) -> Self {
         SegmentParams {
             phases,
+            auto_phases: None,
             edge_length: None,
             max_iterations: 500,
             init: Init::Histogram,
@@ -271,6 +277,16 @@ impl SegmentParams {
         let [width, height, depth] = dims;
         if self.phases < 2 || self.phases > MAX_PHASES {
             return Err(SegmentError::Phases(self.phases));
+        }
+        if let Some(max) = self.auto_phases {
+            if !(2..=MAX_PHASES).contains(&max) {
+                return Err(SegmentError::Phases(max));
+            }
+            if !matches!(self.init, Init::Histogram | Init::Range) {
+                return Err(SegmentError::Init(
+                    "choosing the number of phases needs the histogram or range start".into(),
+                ));
+            }
         }
         if let Some(l) = self.edge_length {
             let max = dims.iter().filter(|&&d| d > 1).copied().min().unwrap_or(1) as f64;
@@ -476,6 +492,25 @@ impl SegmentParams {
             .fold(f64::INFINITY, f64::min);
         let side = side.max(1.0) as usize;
         default_edge_length(side, side, self.phases) * step
+    }
+
+    /// These parameters for `phases` phases: the phase count replaced, and a
+    /// length weight left at its default for the old count moved to the
+    /// default for the new one (the defaults differ between two phases and more).
+    pub fn with_phases(&self, phases: usize) -> Self {
+        let default_weight = |n: usize| {
+            if self.flip_interval == 20 {
+                Self::new_3d(n).length_weight
+            } else {
+                Self::new(n).length_weight
+            }
+        };
+        let mut p = self.clone();
+        if self.length_weight == default_weight(self.phases) {
+            p.length_weight = default_weight(phases);
+        }
+        p.phases = phases;
+        p
     }
 
     /// The edge length to use for an image or volume of `dims` samples.

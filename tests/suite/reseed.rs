@@ -1,4 +1,5 @@
-//! Phases that empty or duplicate another are re-seeded, or reported.
+//! Phases that empty or duplicate another are re-seeded, or reported; the
+//! number of phases chosen from the data.
 
 use dsc_seg::phantom::Phantom2Kind;
 use dsc_seg::pipeline::mean_dice;
@@ -51,4 +52,19 @@ fn too_many_phases_give_a_warning() {
     let mut seg = Segmentation2::new(view, SegmentParams::new(4)).unwrap();
     let report = seg.run(|_| {});
     assert!(!report.warnings.is_empty(), "{report:?}");
+}
+
+/// `--phases auto` finds the number of phases of the disks phantoms.
+#[test]
+fn the_number_of_phases_is_chosen_from_the_data() {
+    use dsc_seg::dim::D2;
+    use dsc_seg::segment::auto::choose_phases;
+    for (kind, noise) in [(Phantom2Kind::Disks(2), 0.1), (Phantom2Kind::Disks(3), 0.2)] {
+        let ph = kind.generate(160, noise, 1);
+        let view = ImageView::new_2d(ph.width, ph.height, &ph.image).unwrap();
+        let choice = choose_phases::<D2>(view, 8, SegmentParams::new).unwrap();
+        assert_eq!(choice.phases, kind.phases(), "{kind}: {choice:?}");
+        let last = choice.trials.last().unwrap();
+        assert!(!last.accepted && last.reason.is_some(), "{choice:?}");
+    }
 }

@@ -1,0 +1,133 @@
+//! Choosing the number of phases (`--phases auto`).
+//!
+//! The segmentation is run with 2, 3, … phases and the largest count whose
+//! result is a *piecewise-constant fit with every phase real* is kept, the
+//! runs stopping at the first count that fails. A phase is not real when
+//!
+//! - it is lost: empty, or its mean duplicates another's within the noise
+//!   ([`reseed`](super::reseed); re-seeding is tried first), which is what
+//!   an extra phase becomes on a region of one true phase: the two halves of
+//!   one phase have the same mean up to noise;
+//! - it is a band along edges: blurred or partial-volume edges have
+//!   intermediate values, and a spare phase settles on them as a strip a
+//!   few pixels wide. Its *thickness* (area over boundary length in 2D,
+//!   volume over boundary area in 3D; half the width of a strip, a quarter
+//!   of the diameter of a disk) is below [`MIN_THICKNESS`] pixels.
+//!
+//! Both tests are scale-free, so the choice does not depend on the
+//! intensities' units, and both follow from the piecewise-constant model:
+//! its phases are regions of constant mean, and the model with one more
+//! phase is kept only if the data support a new constant region.
+
+use super::error::SegmentError;
+use super::image::ImageView;
+use super::params::SegmentParams;
+use super::raster::Raster;
+use super::Segmentation;
+use crate::complex::Complex;
+use serde::Serialize;
+
+/// Default largest number of phases tried.
+pub const DEFAULT_MAX_PHASES: usize = 8;
+
+/// Thinnest phase (area over boundary length, pixels) a result may have;
+/// thinner phases are bands along blurred edges.
+pub const MIN_THICKNESS: f64 = 2.5;
+
+/// One tried phase count.
+#[derive(Clone, Debug, Serialize)]
+pub struct PhaseTrial {
+    /// The number of phases.
+    pub phases: usize,
+    /// Whether every phase of the result is real.
+    pub accepted: bool,
+    /// Why not, when not.
+    pub reason: Option<String>,
+    /// Thickness of the thinnest phase, in pixels.
+    pub thinnest: f64,
+    /// Data term `Σ (I − m)²` of the result.
+    pub data_energy: f64,
+    /// Iterations of the run.
+    pub iterations: usize,
+}
+
+/// The outcome of [`choose_phases`].
+#[derive(Clone, Debug, Serialize)]
+pub struct PhaseChoice {
+    /// The chosen number of phases.
+    pub phases: usize,
+    /// The largest number tried.
+    pub max_phases: usize,
+    /// Every run, in order.
+    pub trials: Vec<PhaseTrial>,
+}
+
+/// Runs the segmentation of `image` with `params(n)` for n = 2, 3, … up to
+/// `max_phases` and returns the largest n whose phases are all real (see the
+/// module documentation), with every trial. Counts above the image's distinct
+/// values are not tried.
+pub fn choose_phases<K: Raster>(
+    image: ImageView<'_>,
+    max_phases: usize,
+    params: impl Fn(usize) -> SegmentParams,
+) -> Result<PhaseChoice, SegmentError> {
+    if max_phases < 2 {
+        return Err(SegmentError::Phases(max_phases));
+    }
+    let distinct = image.distinct_values(max_phases);
+    let mut trials: Vec<PhaseTrial> = Vec::new();
+    let mut chosen = 2;
+    for n in 2..=max_phases.min(distinct.max(2)) {
+        let mut seg = Segmentation::<K>::new(image, params(n))?;
+        let report = seg.run(|_| {});
+        let thinnest = thinnest_phase(seg.complex(), &seg.phases().count);
+        let lost = seg.lost_phases();
+        let reason = if let Some(l) = lost.first() {
+            Some(l.describe(seg.phases()))
+        } else if thinnest < MIN_THICKNESS {
+            Some(format!(
+                "a phase is {thinnest:.2} px thick (a band along edges, not a region)"
+            ))
+        } else {
+            None
+        };
+        let accepted = reason.is_none() || n == 2;
+        trials.push(PhaseTrial {
+            phases: n,
+            accepted,
+            reason,
+            thinnest,
+            data_energy: report.history.last().map_or(f64::NAN, |r| r.data_energy),
+            iterations: report.iterations,
+        });
+        if !accepted {
+            break;
+        }
+        chosen = n;
+    }
+    Ok(PhaseChoice {
+        phases: chosen,
+        max_phases,
+        trials,
+    })
+}
+
+/// The smallest ratio, over the phases, of a phase's pixel count to the
+/// measure of its boundary (the domain border excluded); infinite for a
+/// phase without boundary.
+pub fn thinnest_phase<K: Raster>(complex: &Complex<K>, count: &[u64]) -> f64 {
+    let mut boundary = vec![0.0; count.len()];
+    for f in complex.interface_facets() {
+        for l in [f.a, f.b] {
+            if let Some(b) = boundary.get_mut(l as usize) {
+                *b += f.measure;
+            }
+        }
+    }
+    count
+        .iter()
+        .zip(&boundary)
+        .filter(|(&c, _)| c > 0)
+        .map(|(&c, &b)| if b > 0.0 { c as f64 / b } else { f64::INFINITY })
+        .fold(f64::INFINITY, f64::min)
+}
