@@ -40,10 +40,7 @@ pub enum JunctionForce {
     /// the linear weights of eq. (7) then give exactly eq. (6) on that edge;
     /// the junction gets the hat-weighted sum of its edges' forces, like an
     /// interface vertex (the gradient of the data term with respect to the
-    /// junction's position). Removes the wedges: on the harness's four-phase
-    /// 256² phantoms (three noise seeds, σ = 0.1) mean Dice 0.9868, 0.9877,
-    /// 0.9873 with [`Paper`](Self::Paper) and 0.9906, 0.9880, 0.9888 with
-    /// this rule, everything else at its default.
+    /// junction's position). No wedges (measurements: `docs/parameters.md`).
     EdgeLocal,
 }
 
@@ -148,50 +145,37 @@ pub struct SegmentParams {
     pub force: ForceModel,
     /// External force of triple junctions (see [`JunctionForce`]).
     pub junction_force: JunctionForce,
-    /// Weight β of the rigidity term of eq. (2), relative to the normalised
-    /// region force (the bending term `−Δ²X`, in pixels, is divided by L).
-    /// Default 5: a zig-zag of amplitude `a` then feels `20·a/L`, so noise
-    /// wiggles of a tenth of L are resisted about as strongly as a pixel at a
-    /// phase mean pushes, while a circle of radius R ≫ L feels only
-    /// `≈ 5·L³/(4R⁴)`, negligible (measured: 0.5 left jagged boundaries on the
-    /// σ = 0.2 phantoms). The driver splits the bending step into stable
-    /// sub-steps, so β keeps this meaning at every step size. Measured on
-    /// the harness's 8 images × 3 noise seeds: mean Dice 0.9877 (β = 1),
-    /// 0.9892 (2), 0.9904 (5), 0.9904 (10).
+    /// Weight β of the rigidity term of eq. (2), dimensionless, relative to
+    /// the normalised region force (the bending term `−Δ²X`, in pixels, is
+    /// divided by L). Default 5: a zig-zag of amplitude `a` feels `20·a/L`,
+    /// a circle of radius R ≫ L only `≈ 5·L³/(4R⁴)`. The driver splits the
+    /// bending step into stable sub-steps, so β means the same at every step
+    /// size. Evidence for the default: `docs/parameters.md`.
     pub rigidity: f64,
     /// Weight α of the elasticity term of eq. (2); 0 by default, as the paper
     /// argues (the DSC keeps the curve's sampling itself).
     pub elasticity: f64,
     /// Largest displacement per iteration as a fraction of L (when the
-    /// largest force reaches 1, i.e. a pixel exactly at a mean). Default 0.2:
-    /// the steepest slope of the averaged force across a blurred edge is
-    /// ≈ 0.7/px, so an explicit step of 0.2·L·0.7 stays below the stability
-    /// limit 2 for every default L (≤ 10 px), and a boundary crosses half a
-    /// cell in ~3 iterations. Measured on the eight harness images: 0.05,
-    /// 0.1, 0.15, 0.2, 0.25 give mean Dice within ±0.004 of each other, 0.2
-    /// best overall. The driver halves the step (down to 1/16) whenever the
-    /// energy has not reached a new low for 10 iterations, so that noisy
-    /// runs settle and the stopping rule can fire. With β held fixed by the
-    /// bending sub-steps, 0.3 gave the same mean Dice over the harness's 8
-    /// images × 3 seeds (0.9908 against 0.9904) with a larger spread.
+    /// largest force reaches 1, i.e. a pixel exactly at a mean). Default 0.2,
+    /// below the explicit step's stability limit across a blurred edge for
+    /// every default L. The driver halves the step (down to 1/16) whenever
+    /// the energy has not reached a new low for 10 iterations, so that noisy
+    /// runs settle. Evidence: `docs/parameters.md`.
     pub step_fraction: f64,
     /// Converged when the largest displacement stays below this fraction of L ...
     pub converge_displacement: f64,
     /// ... and nothing flips, for this many iterations in a row.
     pub converge_iterations: usize,
-    /// Weight of the length term in the Mumford–Shah energy (reported, and used
-    /// by the flip guard) as a multiple of the smallest gap between the initial
-    /// means: `ν = length_weight · gap` (intensity² per pixel of length for an
-    /// image in `[0, 1]`). Default 0.3 for two phases, 0.4 for more, because
-    /// the two flip rules need different guards. With more phases the
-    /// pixel-dominant rule lets blurred edges between distant means grow a
-    /// band of an intermediate phase, which 0.4 removes (four phases, gap 0.2
-    /// → ν = 0.08; 128² four-phase phantom: mean Dice 0.958 at 0.4, 0.927 at
-    /// 0.3). Two phases have no such band, and 0.3 keeps a 5-pixel bar
-    /// (gap 0.4 → ν = 0.12; at 0.4 one noise seed of the 256², σ = 0.2
-    /// harness phantom lost half of the bar: mean Dice 0.9815 against
-    /// 0.9855). Scaling with the gap rather than its square matches the
-    /// noise-driven part of the data term, which is linear in the gap.
+    /// Weight `w` of the length (3D: area) term of the Mumford–Shah energy,
+    /// dimensionless: `ν = w·Δ·R`, with Δ the smallest gap between the initial
+    /// phase means and R the robust intensity range (see
+    /// [`IntensityStats::scale`](super::intensity::IntensityStats::scale)), so
+    /// ν is in intensity² per pixel of length like the data term per pixel and
+    /// `a·I + b` gives the labels of `I`. ν is reported, and used by the flip
+    /// guard. Default 0.3 for two phases, 0.4 for more (with more phases the
+    /// pixel-dominant flip rule grows bands of intermediate phases along
+    /// blurred edges, which 0.4 removes); 0.1 in 3D ([`new_3d`](Self::new_3d)).
+    /// Evidence: `docs/parameters.md`.
     pub length_weight: f64,
     /// Spacing of the samples along interface facets, in pixels.
     pub sample_spacing: f64,
@@ -228,35 +212,13 @@ impl SegmentParams {
     }
 
     /// The defaults for a volume (3D) with `phases` phases: as [`new`](Self::new)
-    /// but `length_weight` 0.1. The length term is an area in 3D, and a thin
-    /// structure has more area per voxel than a 2D shape has length per pixel:
-    /// at 0.4 the flip guard removed the whole torus of the 32³ phantom (its
-    /// tube is 7 voxels across; mean Dice 0.48), at 0.1 two balls, torus and
-    /// hollow sphere at noise 0.1 reach mean Dice 0.978, 0.962 and 0.939.
-    ///
-    /// `flip_interval` 20, as the 3D reference code: with flips on every
+    /// but `length_weight` 0.1 (the length term is an area, and thin
+    /// structures have more area per voxel than 2D shapes have length per
+    /// pixel), `flip_interval` 20 as the 3D reference code (with flips every
     /// iteration a few cells flip every iteration and the stopping rule never
-    /// fires (64³ torus, σ = 0.2: 500 iterations, 4–12 flips per iteration to
-    /// the end, mean Dice 0.980); every 20 iterations the 64³ phantoms at
-    /// σ = 0.1 stop by convergence (two balls after 77 iterations, torus
-    /// after 54, hollow sphere after 57; mean Dice 0.992, 0.989, 0.983).
-    ///
-    /// `flip_once` on: at σ = 0.2 the runs still hit the 500-iteration cap, because
-    /// every flip round relabelled 20–70 interface cells of one or two voxels, most
-    /// of them away from the true boundary (64³ two balls, iteration 101: 56 away,
-    /// 9 towards), and the rigidity needed the next ~18 iterations to smooth each
-    /// bump back, longer than the 5 quiet iterations the stopping rule waits for.
-    /// With each voxel flipped at most once the rounds flip fewer cells each time
-    /// (`examples/dev/flips3d.rs`: 139, 88, 46, …, 6) and all six 64³ phantoms stop by
-    /// convergence: σ = 0.2 two balls 179 iterations (Dice 0.9833 → 0.9838), torus
-    /// 178 (0.9812 → 0.9814), hollow sphere 294 (0.9781 → 0.9788); σ = 0.1 76, 57,
-    /// 78 iterations, Dice 0.9924, 0.9888, 0.9836 (within ±0.0003 of before).
-    /// Measured before the bending sub-steps: at 128³ all six stopped by the
-    /// rule as well (Dice 0.9907–0.9966), but at σ = 0.2 only late (torus 420
-    /// iterations, hollow sphere 320, two balls on its 500th). With the
-    /// sub-steps the bumps a flip round leaves relax faster: 128³ σ = 0.2 stops
-    /// after 77, 240 and 260 iterations (Dice 0.9926, 0.9908, 0.9911), 64³
-    /// σ = 0.2 after 36, 120 and 179. Full table: `benches/RESULTS.md`.
+    /// fires) and `flip_once` on (under strong noise each flip round
+    /// relabelled interface voxels that the rigidity then smoothed back).
+    /// Evidence: `docs/parameters.md`.
     pub fn new_3d(phases: usize) -> Self {
         SegmentParams {
             length_weight: 0.1,
