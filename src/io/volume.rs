@@ -844,21 +844,26 @@ pub fn save_labels_nifti(
     put32(&mut h, 128, 0.0); // cal_min
     h.extend_from_slice(&[0; 4]); // no extensions
     h.extend_from_slice(labels);
+    write_nifti_bytes(path, &h)
+}
+
+/// Decodes one NIfTI sample of `datatype` from its bytes.
+/// Writes a whole NIfTI file atomically, gzip-compressed when `path` ends in `.gz`.
+fn write_nifti_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     let gz = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
     if gz {
         write_atomic(path, |w| {
             let mut enc = flate2::write::GzEncoder::new(w, flate2::Compression::default());
-            std::io::Write::write_all(&mut enc, &h)?;
+            std::io::Write::write_all(&mut enc, bytes)?;
             enc.finish().map(|_| ())
         })
     } else {
-        write_bytes_atomic(path, &h)
+        write_bytes_atomic(path, bytes)
     }
 }
 
-/// Decodes one NIfTI sample of `datatype` from its bytes.
 fn decode_sample(datatype: i16, c: &[u8], le: bool) -> f64 {
     macro_rules! num {
         ($t:ty) => {{
@@ -948,18 +953,7 @@ pub fn save_nifti(path: impl AsRef<Path>, volume: &Volume) -> Result<()> {
     for v in &volume.data {
         bytes.extend_from_slice(&v.to_le_bytes());
     }
-    let gz = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
-    if gz {
-        write_atomic(path, |w| {
-            let mut enc = flate2::write::GzEncoder::new(w, flate2::Compression::default());
-            std::io::Write::write_all(&mut enc, &bytes)?;
-            enc.finish().map(|_| ())
-        })
-    } else {
-        write_bytes_atomic(path, &bytes)
-    }
+    write_nifti_bytes(path, &bytes)
 }
 
 /// Saves `labels` (`dims = [nx, ny, nz]`, x fastest as in [`Volume`]) as a
