@@ -13,11 +13,10 @@
 
 use crate::error::{Error, Result};
 use crate::io::write_bytes_atomic;
-use crate::pipeline::{load_image, segment_image_then, with_init_labels, Provenance, Source};
-use crate::pipeline3d::{load_volume, segment_volume_then, with_init_labels3};
+use crate::pipeline::{Job, Segment3dJob, SegmentJob, Source};
 use crate::segment::SegmentParams;
 use crate::segmented::Outputs;
-use crate::staging::{self, Staging};
+use crate::staging;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -49,7 +48,7 @@ pub enum Task {
         params: SegmentParams,
         /// The label volume for `Init::Labels`.
         init_labels: Option<PathBuf>,
-        /// The initial surface (see [`crate::pipeline3d::Segment3dJob::init_surface`]).
+        /// The initial surface (see [`crate::pipeline::Segment3dJob::init_surface`]).
         init_surface: Option<PathBuf>,
     },
 }
@@ -383,43 +382,41 @@ impl Batch {
             }
         }
         let source = Source::File(input.to_path_buf());
-        let (result, stage) = match &self.task {
+        let summary = match &self.task {
             Task::Image {
                 params,
                 init_labels,
-            } => {
-                let (image, _) = load_image(&source)?;
-                let params =
-                    with_init_labels(params.clone(), init_labels.as_deref(), image.dims())?;
-                let provenance = provenance(source, init_labels, start);
-                segment_image_then(&image, params, provenance, true, || Staging::new(&dir))?
+            } => SegmentJob {
+                source,
+                out: dir.clone(),
+                params: params.clone(),
+                init_labels: init_labels.clone(),
+                outputs: self.outputs,
+                quiet: true,
             }
+            .run()?,
             Task::Volume {
                 params,
                 init_labels,
                 init_surface,
-            } => {
-                let (volume, _) = load_volume(&source)?;
-                let params =
-                    with_init_labels3(params.clone(), init_labels.as_deref(), volume.dims())?;
-                let provenance = provenance(source, init_labels, start);
-                segment_volume_then(
-                    &volume,
-                    params,
-                    provenance,
-                    init_surface.as_deref(),
-                    true,
-                    || Staging::new(&dir),
-                )?
+            } => Segment3dJob {
+                source,
+                out: dir.clone(),
+                params: params.clone(),
+                init_labels: init_labels.clone(),
+                init_surface: init_surface.clone(),
+                outputs: self.outputs,
+                quiet: true,
+                spacing: None,
             }
+            .run()?,
         };
-        result.write_staged(stage, &dir, &self.outputs)?;
         let row = Row {
             name: stem(input),
             input: input.to_path_buf(),
             phases: Some(self.params().phases),
-            iterations: Some(result.summary.iterations),
-            converged: Some(result.summary.converged),
+            iterations: Some(summary.iterations),
+            converged: Some(summary.converged),
             seconds: Some(start.elapsed().as_secs_f64()),
             status: Status::Done,
             error: String::new(),
@@ -480,15 +477,6 @@ impl Batch {
         let marker: Marker = serde_json::from_slice(&bytes).ok()?;
         let all_there = fingerprint.outputs.iter().all(|f| dir.join(f).is_file());
         (marker.fingerprint == *fingerprint && all_there).then_some(marker.row)
-    }
-}
-
-fn provenance(source: Source, init_labels: &Option<PathBuf>, start: Instant) -> Provenance {
-    Provenance {
-        source,
-        init_labels: init_labels.clone(),
-        truth: None,
-        load_seconds: start.elapsed().as_secs_f64(),
     }
 }
 

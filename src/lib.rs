@@ -147,7 +147,6 @@ pub mod ops;
 pub mod options;
 pub mod phantom;
 pub mod pipeline;
-pub mod pipeline3d;
 pub mod segment;
 pub mod segmented;
 pub mod staging;

@@ -4,7 +4,7 @@
 //!
 //! The command line (one input or a batch) and the Python package both go
 //! through [`crate::pipeline::segment_image`] /
-//! [`crate::pipeline3d::segment_volume`] and this type, so their labels and
+//! [`crate::pipeline::segment_volume`] and this type, so their labels and
 //! files are the same by construction.
 
 use crate::complex::{Complex2, Complex3};

@@ -11,8 +11,10 @@ mod errors;
 
 use clap::Parser;
 use dsc_seg::options::{Segment3dOptions, SegmentOptions};
-use dsc_seg::pipeline::{load_image, segment_image, with_init_labels, Provenance, Source};
-use dsc_seg::pipeline3d::{load_volume, segment_volume, with_init_labels3};
+use dsc_seg::pipeline::{
+    load_image, load_volume, segment_image, segment_volume, with_init_labels, with_init_labels3,
+    Provenance, Source,
+};
 use dsc_seg::segmented::{Outputs, Segmented};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;

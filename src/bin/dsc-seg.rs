@@ -3,8 +3,9 @@
 use clap::{Parser, Subcommand};
 use dsc_seg::batch::{expand_inputs, is_batch_folder, Batch, Shard, Status, Task};
 use dsc_seg::options::{one_line, Segment3dOptions, SegmentOptions};
-use dsc_seg::pipeline::{run_phantom, run_segment, SegmentJob, Source};
-use dsc_seg::pipeline3d::{run_phantom3d, run_segment3d, Segment3dJob};
+use dsc_seg::pipeline::{
+    run_phantom, run_phantom3d, run_segment, run_segment3d, Segment3dJob, SegmentJob, Source,
+};
 use dsc_seg::segmented::Outputs;
 use dsc_seg::Error;
 use std::path::PathBuf;

@@ -4,8 +4,7 @@
 
 use dsc_seg::io::frame::Affine;
 use dsc_seg::io::{save_nifti, FrameSource, Volume};
-use dsc_seg::pipeline::Source;
-use dsc_seg::pipeline3d::{run_segment3d, Segment3dJob};
+use dsc_seg::pipeline::{run_segment3d, Segment3dJob, Source};
 use dsc_seg::segment::SegmentParams;
 use dsc_seg::segmented::Outputs;
 use vtkio::model::{DataSet, Piece, Vtk};

@@ -1,11 +1,11 @@
-//! Whole jobs as the command line runs them: load, validate, segment, write
-//! every output into a directory without ever leaving it half-written.
-//!
-//! Outputs are first written into a hidden staging directory inside the
-//! output directory and only renamed into place once all of them exist, so a
-//! failure leaves the directory as it was (see [`crate::staging`]). The run
-//! itself is [`segment_image`], which the Python package calls directly.
+//! The 2D job: an image file (PNG, TIFF, JPEG, ...) or a built-in phantom,
+//! segmented with the triangle DSC into `labels.png`, overlays, `mesh.vtu`
+//! and `report.json`.
 
+use super::{
+    add_frame_and_phases, check_label_range, check_phantom, mean_dice, run_with_progress,
+    GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
+};
 use crate::dim::D2;
 use crate::error::{Error, Result};
 use crate::io::intensity::IntensityMap;
@@ -14,35 +14,13 @@ use crate::io::{save_gray8_png, Frame, Image2, Overlay, SampleType};
 use crate::phantom::{self, Phantom2Kind};
 use crate::segment::auto::{choose_phases, PhaseChoice};
 use crate::segment::measurements::Measurements;
-use crate::segment::{ImageView, Init, Raster, SegmentParams, SegmentReport, Segmentation};
+use crate::segment::{ImageView, Init, SegmentParams, SegmentReport, Segmentation};
 use crate::segmented::{Outputs, Render, Segmented};
 use crate::staging::Staging;
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// Where the image comes from.
-#[derive(Clone, Debug, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Source {
-    /// An image file.
-    File(PathBuf),
-    /// A built-in phantom.
-    Phantom {
-        /// Phantom name.
-        name: String,
-        /// Side in pixels.
-        size: usize,
-        /// Noise standard deviation.
-        noise: f64,
-        /// RNG seed.
-        seed: u64,
-    },
-    /// An array handed over in memory (the Python package).
-    Array,
-}
 
 /// A segmentation job.
 #[derive(Clone, Debug)]
@@ -60,118 +38,6 @@ pub struct SegmentJob {
     pub outputs: Outputs,
     /// No progress bar.
     pub quiet: bool,
-}
-
-/// A phantom's true labels (phases by increasing mean).
-#[derive(Clone, Debug)]
-pub struct GroundTruth {
-    /// Phase per pixel or voxel.
-    pub labels: Vec<u8>,
-    /// Number of phases.
-    pub phases: usize,
-}
-
-/// What a report says about a run's input beyond the image itself.
-#[derive(Clone, Debug)]
-pub struct Provenance {
-    /// Where the image came from.
-    pub source: Source,
-    /// The label file `Init::Labels` was loaded from.
-    pub init_labels: Option<PathBuf>,
-    /// The ground truth, for the report's Dice score.
-    pub truth: Option<GroundTruth>,
-    /// Seconds spent loading the input.
-    pub load_seconds: f64,
-}
-
-impl Provenance {
-    /// An in-memory input without ground truth.
-    pub fn array() -> Self {
-        Provenance {
-            source: Source::Array,
-            init_labels: None,
-            truth: None,
-            load_seconds: 0.0,
-        }
-    }
-}
-
-/// Seconds per stage of a job.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
-pub struct JobTimes {
-    /// Loading (or generating) the input.
-    pub load: f64,
-    /// The segmentation proper (mesh set-up and evolution).
-    pub segment: f64,
-    /// Rendering and writing the outputs.
-    pub write: f64,
-}
-
-/// What every `report.json` holds, 2D or 3D: enough to reproduce the run
-/// (tool, input, every parameter) and to follow it (energy and flips per
-/// iteration, timings per stage). The pipelines add their own fields.
-#[derive(Serialize)]
-pub(crate) struct RunReport<'a> {
-    tool: &'static str,
-    version: &'static str,
-    source: &'a Source,
-    init_labels: Option<&'a Path>,
-    params: &'a SegmentParams,
-    dsc: &'a crate::dsc::DscParams,
-    /// Rank (by increasing mean) of each mesh label: the value written for it.
-    phase_order: Vec<u8>,
-    /// The final means by rank, i.e. of output values 0, 1, ...
-    ordered_means: Vec<Option<f64>>,
-    iterations: usize,
-    converged: bool,
-    final_means: &'a [Option<f64>],
-    final_energy: f64,
-    energy: Vec<f64>,
-    flips: Vec<usize>,
-    vertices: usize,
-    cells: usize,
-    times: JobTimes,
-    truth_dice: Option<f64>,
-    segmentation: &'a SegmentReport,
-}
-
-impl<'a> RunReport<'a> {
-    /// The shared part of the report of a finished run of `seg`.
-    pub(crate) fn new<K: Raster>(
-        tool: &'static str,
-        (source, init_labels): (&'a Source, Option<&'a Path>),
-        seg: &'a Segmentation<'_, K>,
-        report: &'a SegmentReport,
-        times: JobTimes,
-        truth_dice: Option<f64>,
-    ) -> Self {
-        let order = seg.phase_order();
-        let mut ordered_means = vec![None; order.len()];
-        for (l, &rank) in order.iter().enumerate() {
-            ordered_means[rank as usize] = report.final_means.get(l).copied().flatten();
-        }
-        RunReport {
-            tool,
-            version: env!("CARGO_PKG_VERSION"),
-            source,
-            init_labels,
-            params: seg.params(),
-            dsc: seg.dsc_params(),
-            phase_order: order,
-            ordered_means,
-            iterations: report.iterations,
-            converged: report.converged,
-            final_means: &report.final_means,
-            final_energy: report.final_energy,
-            energy: report.history.iter().map(|r| r.energy).collect(),
-            flips: report.history.iter().map(|r| r.flips).collect(),
-            vertices: report.vertices,
-            cells: report.cells,
-            times,
-            truth_dice,
-            segmentation: report,
-        }
-    }
 }
 
 /// The 2D report: the shared fields, the image size and the input's units.
@@ -240,61 +106,8 @@ fn overlay_arrays(seg: &Segmentation<'_, D2>) -> (Vec<[f64; 2]>, Vec<[u32; 3]>, 
     (arrays.points_2d(), arrays.triangles(), phase)
 }
 
-/// Runs a segmentation to its end with a progress bar on stderr (hidden when
-/// `quiet`), shared by the 2D and 3D pipelines.
-pub(crate) fn run_with_progress<K: Raster>(
-    seg: &mut Segmentation<'_, K>,
-    max_iterations: usize,
-    quiet: bool,
-) -> SegmentReport {
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        let b = ProgressBar::new(max_iterations as u64);
-        b.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        b
-    };
-    let report = seg.run(|r| {
-        bar.set_position(r.iteration as u64);
-        bar.set_message(format!(
-            "E={:.4} flips={} move={:.3}L",
-            r.energy, r.flips, r.max_displacement
-        ));
-    });
-    bar.finish_and_clear();
-    report
-}
-
 /// Sides of the 2D phantoms.
 const PHANTOM2_SIZES: RangeInclusive<usize> = 8..=8192;
-
-/// Checks a phantom's side and noise before generating it: a huge side would
-/// exhaust memory, a NaN noise would poison every sample.
-pub(crate) fn check_phantom(
-    what: &str,
-    size: usize,
-    noise: f64,
-    sizes: RangeInclusive<usize>,
-) -> Result<()> {
-    if !sizes.contains(&size) {
-        return Err(Error::Usage(format!(
-            "{what} size {size} must lie in {}..={}",
-            sizes.start(),
-            sizes.end()
-        )));
-    }
-    if !(noise.is_finite() && noise >= 0.0) {
-        return Err(Error::Usage(format!(
-            "noise {noise} must be a non-negative number"
-        )));
-    }
-    Ok(())
-}
 
 /// Loads a label PNG: 8-bit values are the labels.
 fn load_labels(path: &Path, width: usize, height: usize, phases: usize) -> Result<Vec<u8>> {
@@ -314,14 +127,7 @@ fn load_labels(path: &Path, width: usize, height: usize, phases: usize) -> Resul
         .iter()
         .map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
         .collect();
-    if let Some(&m) = labels.iter().max() {
-        if m as usize >= phases {
-            return Err(Error::Usage(format!(
-                "init labels {} use label {m}, but labels must be below the number of phases ({phases})",
-                path.display()
-            )));
-        }
-    }
+    check_label_range(&labels, phases, path)?;
     Ok(labels)
 }
 
@@ -339,26 +145,6 @@ pub fn save_overlay_png(
         .with_mesh(draw_mesh)
         .to_png(path)?;
     Ok(())
-}
-
-/// Mean Dice over the truth's phases (labels already in the same order).
-pub fn mean_dice(pred: &[u8], truth: &[u8], phases: usize) -> f64 {
-    let mut total = 0.0;
-    for k in 0..phases as u8 {
-        let tp = pred
-            .iter()
-            .zip(truth)
-            .filter(|(a, b)| **a == k && **b == k)
-            .count();
-        let np = pred.iter().filter(|&&a| a == k).count();
-        let nt = truth.iter().filter(|&&a| a == k).count();
-        total += if np + nt == 0 {
-            1.0
-        } else {
-            2.0 * tp as f64 / (np + nt) as f64
-        };
-    }
-    total / phases as f64
 }
 
 /// Loads (or generates) a 2D input, with the phantom's ground truth.
@@ -447,25 +233,49 @@ pub fn with_init_labels(
     Ok(params)
 }
 
+impl Job for SegmentJob {
+    type Input = Image2;
+
+    fn source(&self) -> &Source {
+        &self.source
+    }
+
+    fn init_labels(&self) -> Option<&Path> {
+        self.init_labels.as_deref()
+    }
+
+    fn out(&self) -> &Path {
+        &self.out
+    }
+
+    fn outputs(&self) -> &Outputs {
+        &self.outputs
+    }
+
+    fn load(&self) -> Result<(Image2, Option<GroundTruth>)> {
+        load_image(&self.source)
+    }
+
+    fn params_for(&self, image: &Image2) -> Result<SegmentParams> {
+        with_init_labels(self.params.clone(), self.init_labels(), image.dims())
+    }
+
+    fn segment_then<T>(
+        &self,
+        image: &Image2,
+        params: SegmentParams,
+        provenance: Provenance,
+        ready: impl FnOnce() -> Result<T>,
+    ) -> Result<(Segmented, T)> {
+        segment_image_then(image, params, provenance, self.quiet, ready)
+    }
+}
+
 /// Runs a segmentation job and writes its outputs (all: `labels.png`,
 /// `overlay.png`, `overlay.svg`, `mesh.vtu` and `report.json`) into the
 /// output directory.
 pub fn run_segment(job: &SegmentJob) -> Result<SegmentReport> {
-    let t_load = Instant::now();
-    let (image, truth) = load_image(&job.source)?;
-    let params = with_init_labels(job.params.clone(), job.init_labels.as_deref(), image.dims())?;
-    let provenance = Provenance {
-        source: job.source.clone(),
-        init_labels: job.init_labels.clone(),
-        truth,
-        load_seconds: t_load.elapsed().as_secs_f64(),
-    };
-    // The output directory is checked after the parameters, before any work.
-    let (result, stage) = segment_image_then(&image, params, provenance, job.quiet, || {
-        Staging::new(&job.out)
-    })?;
-    result.write_staged(stage, &job.out, &job.outputs)?;
-    Ok(result.summary)
+    job.run()
 }
 
 /// Segments an image held in memory (the parameters' `Init::Labels`, if
@@ -563,19 +373,6 @@ pub(crate) fn segment_image_then<T>(
         render: Render::Image(shown, Box::new(seg.complex().clone()), order),
     };
     Ok((result, ready))
-}
-
-/// Adds the input's frame and the measurements to a report.
-pub(crate) fn add_frame_and_phases(
-    report: &mut serde_json::Value,
-    frame: &Frame,
-    measurements: &Measurements,
-) -> Result<()> {
-    let value =
-        |v: serde_json::Result<serde_json::Value>| v.map_err(|e| Error::Usage(e.to_string()));
-    report["frame"] = value(serde_json::to_value(frame))?;
-    report["phases"] = value(serde_json::to_value(measurements))?;
-    Ok(())
 }
 
 /// Writes phantom `name` (`NAME.png`, ground truth `NAME_gt.png` with phase

@@ -1,18 +1,17 @@
-//! 3D jobs as the command line runs them: load a volume (TIFF stack, folder
-//! of slices, NIfTI) or generate a built-in 3D phantom, segment it with the
-//! tetrahedral DSC, and write `labels.tif`, `mesh.vtu`, `interface.vtp` and
-//! `report.json` through the same staged, all-or-nothing output directory as
-//! the 2D pipeline.
+//! The 3D job: a volume (TIFF stack, folder of slices, NIfTI) or a built-in
+//! 3D phantom, segmented with the tetrahedral DSC into `labels.tif`,
+//! `mesh.vtu`, `interface.vtp` and `report.json` through the same staged,
+//! all-or-nothing output directory as the 2D job.
 
+use super::{
+    add_frame_and_phases, check_label_range, check_phantom, mean_dice, run_with_progress,
+    GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
+};
 use crate::dim::D3;
 use crate::error::{Error, Result};
 use crate::io::{save_labels_tiff, Volume};
 use crate::phantom::noise::to_u8;
 use crate::phantom::Phantom3Kind;
-use crate::pipeline::{
-    add_frame_and_phases, check_phantom, mean_dice, run_with_progress, GroundTruth, JobTimes,
-    Provenance, RunReport, Source,
-};
 use crate::segment::measurements::Measurements;
 use crate::segment::{ImageView, Init, SegmentParams, SegmentReport, Segmentation};
 use crate::segmented::{Outputs, Render, Segmented};
@@ -110,14 +109,7 @@ fn load_label_volume(path: &Path, dims: [usize; 3], phases: usize) -> Result<Vec
         )));
     }
     let labels: Vec<u8> = v.data().iter().map(|&x| to_u8(x as f64)).collect();
-    if let Some(&m) = labels.iter().max() {
-        if m as usize >= phases {
-            return Err(Error::Usage(format!(
-                "init labels {} use label {m}, but labels must be below the number of phases ({phases})",
-                path.display()
-            )));
-        }
-    }
+    check_label_range(&labels, phases, path)?;
     Ok(labels)
 }
 
@@ -170,33 +162,58 @@ pub fn with_init_labels3(
 /// triangles with cell data `phase` and `phase_other`; `report.json`) into
 /// the output directory.
 pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
-    let t_load = Instant::now();
-    let (volume, truth) = load_volume(&job.source)?;
-    let volume = match job.spacing {
-        Some(s) => volume.respaced(s),
-        None => volume,
-    };
-    let params = with_init_labels3(
-        job.params.clone(),
-        job.init_labels.as_deref(),
-        volume.dims(),
-    )?;
-    let provenance = Provenance {
-        source: job.source.clone(),
-        init_labels: job.init_labels.clone(),
-        truth,
-        load_seconds: t_load.elapsed().as_secs_f64(),
-    };
-    let (result, stage) = segment_volume_then(
-        &volume,
-        params,
-        provenance,
-        job.init_surface.as_deref(),
-        job.quiet,
-        || Staging::new(&job.out),
-    )?;
-    result.write_staged(stage, &job.out, &job.outputs)?;
-    Ok(result.summary)
+    job.run()
+}
+
+impl Job for Segment3dJob {
+    type Input = Volume;
+
+    fn source(&self) -> &Source {
+        &self.source
+    }
+
+    fn init_labels(&self) -> Option<&Path> {
+        self.init_labels.as_deref()
+    }
+
+    fn out(&self) -> &Path {
+        &self.out
+    }
+
+    fn outputs(&self) -> &Outputs {
+        &self.outputs
+    }
+
+    /// The volume, with the job's voxel size if it has one.
+    fn load(&self) -> Result<(Volume, Option<GroundTruth>)> {
+        let (volume, truth) = load_volume(&self.source)?;
+        let volume = match self.spacing {
+            Some(s) => volume.respaced(s),
+            None => volume,
+        };
+        Ok((volume, truth))
+    }
+
+    fn params_for(&self, volume: &Volume) -> Result<SegmentParams> {
+        with_init_labels3(self.params.clone(), self.init_labels(), volume.dims())
+    }
+
+    fn segment_then<T>(
+        &self,
+        volume: &Volume,
+        params: SegmentParams,
+        provenance: Provenance,
+        ready: impl FnOnce() -> Result<T>,
+    ) -> Result<(Segmented, T)> {
+        segment_volume_then(
+            volume,
+            params,
+            provenance,
+            self.init_surface.as_deref(),
+            self.quiet,
+            ready,
+        )
+    }
 }
 
 /// Segments a volume held in memory (the parameters' `Init::Labels`, if any,

@@ -1,0 +1,318 @@
+//! Whole jobs as the command line runs them: load, validate, segment, write
+//! every output into a directory without ever leaving it half-written.
+//!
+//! Every job goes through the same skeleton, [`Job::run`]: load (or generate)
+//! the input, validate it with the parameters (loading `Init::Labels` from
+//! their file), check the output directory, segment, and write. The two input
+//! kinds fill in the stages: [`SegmentJob`] (a 2D image, [`d2`]) and
+//! [`Segment3dJob`] (a 3D volume, [`d3`]).
+//!
+//! Outputs are first written into a hidden staging directory inside the
+//! output directory and only renamed into place once all of them exist, so a
+//! failure leaves the directory as it was (see [`crate::staging`]). The runs
+//! themselves are [`segment_image`] and [`segment_volume`], which the Python
+//! package calls directly.
+
+pub mod d2;
+pub mod d3;
+
+pub use d2::{
+    load_image, run_phantom, run_segment, save_overlay_png, segment_image, with_init_labels,
+    SegmentJob,
+};
+pub use d3::{
+    load_volume, run_phantom3d, run_segment3d, segment_volume, with_init_labels3, QualitySummary,
+    Segment3dJob,
+};
+
+use crate::error::{Error, Result};
+use crate::io::Frame;
+use crate::segment::measurements::Measurements;
+use crate::segment::{Raster, SegmentParams, SegmentReport, Segmentation};
+use crate::segmented::{Outputs, Segmented};
+use crate::staging::Staging;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use std::ops::RangeInclusive;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Where the image comes from.
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Source {
+    /// An image file.
+    File(PathBuf),
+    /// A built-in phantom.
+    Phantom {
+        /// Phantom name.
+        name: String,
+        /// Side in pixels.
+        size: usize,
+        /// Noise standard deviation.
+        noise: f64,
+        /// RNG seed.
+        seed: u64,
+    },
+    /// An array handed over in memory (the Python package).
+    Array,
+}
+
+/// The stages of a job, whatever its input kind; [`Job::run`] chains them.
+pub trait Job {
+    /// The loaded input: a 2D image or a 3D volume.
+    type Input;
+
+    /// Where the input comes from.
+    fn source(&self) -> &Source;
+    /// The label file of `Init::Labels`, if any.
+    fn init_labels(&self) -> Option<&Path>;
+    /// The output directory.
+    fn out(&self) -> &Path;
+    /// The files to write.
+    fn outputs(&self) -> &Outputs;
+
+    /// Loads (or generates) the input, with a phantom's ground truth.
+    fn load(&self) -> Result<(Self::Input, Option<GroundTruth>)>;
+
+    /// The parameters for `input`, `Init::Labels` loaded and checked against it.
+    fn params_for(&self, input: &Self::Input) -> Result<SegmentParams>;
+
+    /// Segments `input`, calling `ready` once the input and parameters are
+    /// validated, before the run.
+    fn segment_then<T>(
+        &self,
+        input: &Self::Input,
+        params: SegmentParams,
+        provenance: Provenance,
+        ready: impl FnOnce() -> Result<T>,
+    ) -> Result<(Segmented, T)>;
+
+    /// Load → validate → segment → write: runs the job and writes its outputs
+    /// into the output directory (checked after the parameters, before any
+    /// work), all or none of them.
+    fn run(&self) -> Result<SegmentReport> {
+        let t_load = Instant::now();
+        let (input, truth) = self.load()?;
+        let params = self.params_for(&input)?;
+        let provenance = Provenance {
+            source: self.source().clone(),
+            init_labels: self.init_labels().map(Path::to_path_buf),
+            truth,
+            load_seconds: t_load.elapsed().as_secs_f64(),
+        };
+        let (result, stage) =
+            self.segment_then(&input, params, provenance, || Staging::new(self.out()))?;
+        result.write_staged(stage, self.out(), self.outputs())?;
+        Ok(result.summary)
+    }
+}
+
+/// A phantom's true labels (phases by increasing mean).
+#[derive(Clone, Debug)]
+pub struct GroundTruth {
+    /// Phase per pixel or voxel.
+    pub labels: Vec<u8>,
+    /// Number of phases.
+    pub phases: usize,
+}
+
+/// What a report says about a run's input beyond the image itself.
+#[derive(Clone, Debug)]
+pub struct Provenance {
+    /// Where the image came from.
+    pub source: Source,
+    /// The label file `Init::Labels` was loaded from.
+    pub init_labels: Option<PathBuf>,
+    /// The ground truth, for the report's Dice score.
+    pub truth: Option<GroundTruth>,
+    /// Seconds spent loading the input.
+    pub load_seconds: f64,
+}
+
+impl Provenance {
+    /// An in-memory input without ground truth.
+    pub fn array() -> Self {
+        Provenance {
+            source: Source::Array,
+            init_labels: None,
+            truth: None,
+            load_seconds: 0.0,
+        }
+    }
+}
+
+/// Seconds per stage of a job.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct JobTimes {
+    /// Loading (or generating) the input.
+    pub load: f64,
+    /// The segmentation proper (mesh set-up and evolution).
+    pub segment: f64,
+    /// Rendering and writing the outputs.
+    pub write: f64,
+}
+
+/// What every `report.json` holds, 2D or 3D: enough to reproduce the run
+/// (tool, input, every parameter) and to follow it (energy and flips per
+/// iteration, timings per stage). The pipelines add their own fields.
+#[derive(Serialize)]
+pub(crate) struct RunReport<'a> {
+    tool: &'static str,
+    version: &'static str,
+    source: &'a Source,
+    init_labels: Option<&'a Path>,
+    params: &'a SegmentParams,
+    dsc: &'a crate::dsc::DscParams,
+    /// Rank (by increasing mean) of each mesh label: the value written for it.
+    phase_order: Vec<u8>,
+    /// The final means by rank, i.e. of output values 0, 1, ...
+    ordered_means: Vec<Option<f64>>,
+    iterations: usize,
+    converged: bool,
+    final_means: &'a [Option<f64>],
+    final_energy: f64,
+    energy: Vec<f64>,
+    flips: Vec<usize>,
+    vertices: usize,
+    cells: usize,
+    times: JobTimes,
+    truth_dice: Option<f64>,
+    segmentation: &'a SegmentReport,
+}
+
+impl<'a> RunReport<'a> {
+    /// The shared part of the report of a finished run of `seg`.
+    pub(crate) fn new<K: Raster>(
+        tool: &'static str,
+        (source, init_labels): (&'a Source, Option<&'a Path>),
+        seg: &'a Segmentation<'_, K>,
+        report: &'a SegmentReport,
+        times: JobTimes,
+        truth_dice: Option<f64>,
+    ) -> Self {
+        let order = seg.phase_order();
+        let mut ordered_means = vec![None; order.len()];
+        for (l, &rank) in order.iter().enumerate() {
+            ordered_means[rank as usize] = report.final_means.get(l).copied().flatten();
+        }
+        RunReport {
+            tool,
+            version: env!("CARGO_PKG_VERSION"),
+            source,
+            init_labels,
+            params: seg.params(),
+            dsc: seg.dsc_params(),
+            phase_order: order,
+            ordered_means,
+            iterations: report.iterations,
+            converged: report.converged,
+            final_means: &report.final_means,
+            final_energy: report.final_energy,
+            energy: report.history.iter().map(|r| r.energy).collect(),
+            flips: report.history.iter().map(|r| r.flips).collect(),
+            vertices: report.vertices,
+            cells: report.cells,
+            times,
+            truth_dice,
+            segmentation: report,
+        }
+    }
+}
+
+/// Runs a segmentation to its end with a progress bar on stderr (hidden when
+/// `quiet`), shared by the 2D and 3D pipelines.
+pub(crate) fn run_with_progress<K: Raster>(
+    seg: &mut Segmentation<'_, K>,
+    max_iterations: usize,
+    quiet: bool,
+) -> SegmentReport {
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(max_iterations as u64);
+        b.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        b
+    };
+    let report = seg.run(|r| {
+        bar.set_position(r.iteration as u64);
+        bar.set_message(format!(
+            "E={:.4} flips={} move={:.3}L",
+            r.energy, r.flips, r.max_displacement
+        ));
+    });
+    bar.finish_and_clear();
+    report
+}
+
+/// Checks a phantom's side and noise before generating it: a huge side would
+/// exhaust memory, a NaN noise would poison every sample.
+pub(crate) fn check_phantom(
+    what: &str,
+    size: usize,
+    noise: f64,
+    sizes: RangeInclusive<usize>,
+) -> Result<()> {
+    if !sizes.contains(&size) {
+        return Err(Error::Usage(format!(
+            "{what} size {size} must lie in {}..={}",
+            sizes.start(),
+            sizes.end()
+        )));
+    }
+    if !(noise.is_finite() && noise >= 0.0) {
+        return Err(Error::Usage(format!(
+            "noise {noise} must be a non-negative number"
+        )));
+    }
+    Ok(())
+}
+
+/// Checks that the initial labels loaded from `path` all lie below `phases`.
+pub(crate) fn check_label_range(labels: &[u8], phases: usize, path: &Path) -> Result<()> {
+    match labels.iter().max() {
+        Some(&m) if m as usize >= phases => Err(Error::Usage(format!(
+            "init labels {} use label {m}, but labels must be below the number of phases ({phases})",
+            path.display()
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Mean Dice over the truth's phases (labels already in the same order).
+pub fn mean_dice(pred: &[u8], truth: &[u8], phases: usize) -> f64 {
+    let mut total = 0.0;
+    for k in 0..phases as u8 {
+        let tp = pred
+            .iter()
+            .zip(truth)
+            .filter(|(a, b)| **a == k && **b == k)
+            .count();
+        let np = pred.iter().filter(|&&a| a == k).count();
+        let nt = truth.iter().filter(|&&a| a == k).count();
+        total += if np + nt == 0 {
+            1.0
+        } else {
+            2.0 * tp as f64 / (np + nt) as f64
+        };
+    }
+    total / phases as f64
+}
+
+/// Adds the input's frame and the measurements to a report.
+pub(crate) fn add_frame_and_phases(
+    report: &mut serde_json::Value,
+    frame: &Frame,
+    measurements: &Measurements,
+) -> Result<()> {
+    let value =
+        |v: serde_json::Result<serde_json::Value>| v.map_err(|e| Error::Usage(e.to_string()));
+    report["frame"] = value(serde_json::to_value(frame))?;
+    report["phases"] = value(serde_json::to_value(measurements))?;
+    Ok(())
+}
