@@ -6,7 +6,8 @@
 //! uniform mesh) and with `adaptive` on, and prints per structure its recall
 //! and the number of pieces it came out in, plus the cells, Dice and time.
 //!
-//! `cargo run --release --example thin_structures`
+//! `cargo run --release --example thin_structures [-- LENGTH_WEIGHT]`
+//! (the length weight `w` of `--length-weight`; default: the default)
 
 use dsc_seg::dim::D2;
 use dsc_seg::phantom::thin::{components, score, thin};
@@ -14,6 +15,10 @@ use dsc_seg::segment::{ImageView, SegmentParams, Segmentation};
 use std::time::Instant;
 
 fn main() {
+    let length_weight: Option<f64> = std::env::args().nth(1).map(|a| {
+        a.parse()
+            .expect("the argument is the length weight, a number")
+    });
     println!("| size | σ | mesh | cells | s | lines ≥3 px (recall, pieces) | line2 | arcs ≥3 px | arc2 | blobs r≥3 found | border r≥3 found | blob2 / border2 | slit open | star recall |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for size in [256, 512] {
@@ -23,6 +28,9 @@ fn main() {
                 let view = ImageView::new_2d(size, size, &ph.image).expect("image");
                 let mut params = SegmentParams::new(2);
                 params.sizing.adaptive = adaptive;
+                if let Some(w) = length_weight {
+                    params.length_weight = w;
+                }
                 let t = Instant::now();
                 let mut seg = Segmentation::<D2>::new(view, params).expect("segmentation");
                 seg.run(|_| {});

@@ -50,7 +50,9 @@ pub fn structures(size: usize) -> Vec<Structure> {
         out.push(Structure { name, mask });
     };
     for (k, w) in [2.0, 3.0, 4.0].into_iter().enumerate() {
-        let y0 = (30.0 + 20.0 * k as f64) * s;
+        // An odd width is centred on a pixel row, an even one between two
+        // rows, so that a line `w` px wide covers exactly `w` rows.
+        let y0 = (30.0 + 20.0 * k as f64) * s + if w % 2.0 == 1.0 { 0.5 } else { 0.0 };
         add(format!("line{w}"), &|x, y| {
             (y - y0).abs() < 0.5 * w && x > 20.0 * s && x < 140.0 * s
         });
@@ -187,6 +189,17 @@ mod tests {
             for sc in score(&truth, size, 1) {
                 assert_eq!(sc.recall, 1.0, "{} at {size}", sc.name);
                 assert_eq!(sc.components, 1, "{} at {size}", sc.name);
+            }
+            // A line `w` px wide covers `w` pixel rows.
+            for st in structures(size)
+                .iter()
+                .filter(|s| s.name.starts_with("line"))
+            {
+                let w: usize = st.name["line".len()..].parse().unwrap();
+                let rows = (0..size)
+                    .filter(|&j| st.mask[j * size..(j + 1) * size].iter().any(|&m| m))
+                    .count();
+                assert_eq!(rows, w, "{} at {size}", st.name);
             }
             // The slit keeps the ring open: the background is one piece.
             let background: Vec<bool> = truth.iter().map(|&l| l == 0).collect();

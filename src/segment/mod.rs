@@ -16,6 +16,10 @@
 //!   destinations of the deformation;
 //! - [`auto`]: the number of phases chosen from the data (`--phases auto`);
 //! - [`flips`]: label flips (mean rule, pixel-dominant rule);
+//! - [`cluster_flips`]: connected groups of small cells that fit another
+//!   phase, relabelled together (adaptive resolution);
+//! - [`relaxed_length`]: the length a staircase border of small cells
+//!   relaxes to;
 //! - [`reseed`]: phases that empty or duplicate another, found and re-seeded;
 //! - [`model`]: the extension points ([`ForceTerm`], [`LabelRule`],
 //!   [`Initialiser`], [`Models`]) through which a user supplies the evolution;
@@ -31,6 +35,7 @@
 
 pub mod adaptive;
 pub mod auto;
+pub mod cluster_flips;
 pub mod driver;
 pub mod error;
 pub mod flips;
@@ -46,6 +51,7 @@ pub mod models;
 pub mod output;
 pub mod params;
 pub mod raster;
+pub mod relaxed_length;
 pub mod reseed;
 #[cfg(feature = "tetgen")]
 pub mod tetgen_init;

@@ -4,6 +4,7 @@
 //! [`ForceField`]: crate::segment::forces::ForceField
 
 use crate::dim::Point;
+use crate::segment::cluster_flips::ClusterFlipper;
 use crate::segment::driver::{MAX_BENDING_STEP, MAX_STRETCHING_STEP};
 use crate::segment::error::SegmentError;
 use crate::segment::flips::Flipper;
@@ -160,10 +161,15 @@ impl<K: Raster> LabelRule<K> for CellFlips {
 
 /// Whole-region flips (with [`SegmentParams::flip_guard`] only): every
 /// connected same-phase region is relabelled to the neighbouring phase that
-/// lowers the Mumford–Shah energy most, if any does.
+/// lowers the Mumford–Shah energy most, if any does. With adaptive
+/// resolution, connected groups of cells that all fit another phase are
+/// then relabelled together when that lowers the energy
+/// ([`crate::segment::cluster_flips`]): refined cells over a thin line are
+/// too small to flip one by one.
 #[derive(Clone, Debug, Default)]
 pub struct ComponentFlips {
     flipper: Flipper,
+    clusters: ClusterFlipper,
 }
 
 impl<K: Raster> LabelRule<K> for ComponentFlips {
@@ -175,19 +181,27 @@ impl<K: Raster> LabelRule<K> for ComponentFlips {
         if !ctx.params.flip_guard {
             return 0;
         }
-        self.flipper
-            .component_flips(ctx.complex, ctx.cells, ctx.phases, ctx.length_weight)
+        let nu = ctx.length_weight;
+        let mut flips = self
+            .flipper
+            .component_flips(ctx.complex, ctx.cells, ctx.phases, nu);
+        if ctx.params.sizing.adaptive {
+            flips += self.clusters.flip(ctx.complex, ctx.cells, ctx.phases, nu);
+        }
+        flips
     }
 
     fn would_relabel(&mut self, view: &LabelView<'_, '_, K>) -> Option<bool> {
+        let nu = view.length_weight;
         Some(
             view.params.flip_guard
-                && self.flipper.would_flip_components(
-                    view.complex,
-                    view.cells,
-                    view.phases,
-                    view.length_weight,
-                ),
+                && (self
+                    .flipper
+                    .would_flip_components(view.complex, view.cells, view.phases, nu)
+                    || (view.params.sizing.adaptive
+                        && self
+                            .clusters
+                            .would_flip(view.complex, view.cells, view.phases, nu))),
         )
     }
 }
