@@ -10,15 +10,24 @@ Usage: python3 .ci/check_frames.py 2d|3d OUTDIR
     of the phase-1 voxels of OUTDIR/labels.tif as vtkTIFFReader places them
     agree within half a voxel.
 Both: OUTDIR/scene.vtm opens with vtkXMLMultiBlockDataReader and every data set
-in it has points. Exits non-zero on failure. Requires the `vtk` package.
+in it has points; OUTDIR/scene.pvd (ParaView's collection format, which the
+VTK library has no reader for) is well-formed XML, a VTKFile of type
+Collection, and lists the same files, each of which opens with VTK's XML
+readers and has points. Exits non-zero on failure. Requires the `vtk` package.
 """
+import os
 import sys
+import xml.etree.ElementTree as ET
 
 try:
     import numpy as np
     from vtkmodules.util.numpy_support import vtk_to_numpy
     from vtkmodules.vtkIOImage import vtkPNGReader, vtkTIFFReader
-    from vtkmodules.vtkIOXML import vtkXMLMultiBlockDataReader, vtkXMLUnstructuredGridReader
+    from vtkmodules.vtkIOXML import (
+        vtkXMLGenericDataObjectReader,
+        vtkXMLMultiBlockDataReader,
+        vtkXMLUnstructuredGridReader,
+    )
 except ImportError as e:  # pragma: no cover
     sys.exit(f"check_frames: the Python 'vtk' and 'numpy' packages are required ({e})")
 
@@ -66,6 +75,27 @@ def check_scene(path):
     if n < 2 or min(sizes) <= 0:
         sys.exit(f"FAIL {path}: {n} data sets with {sizes} points")
     print(f"ok {path}: {n} data sets with {sizes} points")
+    return n
+
+
+def check_collection(path, expected):
+    """A .pvd: valid XML listing `expected` files that VTK's readers open."""
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError) as e:
+        sys.exit(f"FAIL {path}: not well-formed XML ({e})")
+    if root.tag != "VTKFile" or root.get("type") != "Collection":
+        sys.exit(f"FAIL {path}: not a VTKFile of type Collection")
+    files = [d.get("file") for d in root.iter("DataSet")]
+    if root.find("Collection") is None or len(files) != expected or None in files:
+        sys.exit(f"FAIL {path}: {files} (expected {expected} data sets)")
+    sizes = []
+    for f in files:
+        data = read(vtkXMLGenericDataObjectReader(), os.path.join(os.path.dirname(path), f))
+        sizes.append(data.GetNumberOfPoints())
+    if min(sizes) <= 0:
+        sys.exit(f"FAIL {path}: {files} with {sizes} points")
+    print(f"ok {path}: {files} open with VTK's readers, {sizes} points")
 
 
 def main(argv):
@@ -84,7 +114,8 @@ def main(argv):
     if off.max() > tolerance:
         sys.exit(f"FAIL {line} (more than {tolerance})")
     print(f"ok {line}")
-    check_scene(f"{out}/scene.vtm")
+    blocks = check_scene(f"{out}/scene.vtm")
+    check_collection(f"{out}/scene.pvd", blocks)
     return 0
 
 

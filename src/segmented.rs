@@ -11,7 +11,8 @@ use crate::complex::{Complex2, Complex3};
 use crate::error::{Error, Result};
 use crate::io::resolution::Resolution;
 use crate::io::{
-    save_gray8_png, save_labels_nifti, save_labels_tiff, write_bytes_atomic, write_vti, write_vtm,
+    save_gray8_png, save_labels_nifti, save_labels_tiff, write_bytes_atomic, write_pvd, write_vti,
+    write_vtm,
 };
 use crate::io::{Frame, Image2, Overlay};
 use crate::segment::measurements::Measurements;
@@ -143,7 +144,7 @@ impl Outputs {
         Ok(o)
     }
 
-    /// The VTK files among these outputs (listed by `scene.vtm`).
+    /// The VTK files among these outputs (listed by `scene.vtm` and `scene.pvd`).
     pub fn vtk_files(&self) -> Vec<&'static str> {
         let mut f = Vec::new();
         if self.image {
@@ -159,7 +160,7 @@ impl Outputs {
     }
 
     /// The file names these outputs are, in 2D or 3D, `report.json` last;
-    /// `scene.vtm` comes with any VTK file.
+    /// `scene.vtm` and `scene.pvd` come with any VTK file.
     pub fn files(&self, three_d: bool) -> Vec<&'static str> {
         let mut f = Vec::new();
         if self.labels {
@@ -171,7 +172,7 @@ impl Outputs {
         let vtk = self.vtk_files();
         if !vtk.is_empty() {
             f.extend(vtk);
-            f.push("scene.vtm");
+            f.extend(["scene.vtm", "scene.pvd"]);
         }
         if self.phases {
             f.extend(["phases.csv", "interfaces.csv"]);
@@ -246,6 +247,7 @@ impl Segmented {
         let vtk = outputs.vtk_files();
         if !vtk.is_empty() {
             write_vtm(path("scene.vtm"), &vtk)?;
+            write_pvd(path("scene.pvd"), &vtk)?;
         }
         if outputs.phases {
             let d = self.dims.len();

@@ -49,7 +49,7 @@ enum Command {
 struct BatchArgs {
     /// The outputs to write, comma-separated: labels, overlay (2D), mesh,
     /// interface, image (image.vti), phases (phases.csv, interfaces.csv),
-    /// report, or all. scene.vtm comes with any VTK file.
+    /// report, or all. scene.vtm and scene.pvd come with any VTK file.
     #[arg(long, default_value = "all")]
     outputs: String,
     /// Inputs segmented at once, each on one thread [default: the number of cores].

@@ -1,6 +1,8 @@
 //! The input image or volume as VTK XML image data (`.vti`) in its
-//! [`Frame`], and a multiblock file (`.vtm`) that opens several files
-//! together.
+//! [`Frame`], and the two scene files that open several files together: a
+//! VTK multiblock file (`.vtm`, read by VTK's own XML readers and ParaView)
+//! and a ParaView data collection (`.pvd`, ParaView's format, which the VTK
+//! library alone does not read).
 //!
 //! Written by hand rather than through `vtkio`, whose image data has no
 //! `Direction` (needed for flipped or oblique NIfTI affines) and keeps the
@@ -117,6 +119,25 @@ pub fn write_vtm(path: impl AsRef<Path>, files: &[&str]) -> Result<()> {
     super::atomic::write_bytes_atomic(path, text.as_bytes())
 }
 
+/// Writes a ParaView data collection (`.pvd`) listing `files` (paths
+/// relative to its directory) as parts of one time step, so that opening it
+/// in ParaView shows them all together.
+pub fn write_pvd(path: impl AsRef<Path>, files: &[&str]) -> Result<()> {
+    let mut text = String::from(
+        "<?xml version=\"1.0\"?>\n\
+         <VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n\
+         <Collection>\n",
+    );
+    for (part, f) in files.iter().enumerate() {
+        let _ = writeln!(
+            text,
+            "<DataSet timestep=\"0\" group=\"\" part=\"{part}\" file=\"{f}\"/>"
+        );
+    }
+    text.push_str("</Collection>\n</VTKFile>\n");
+    super::atomic::write_bytes_atomic(path, text.as_bytes())
+}
+
 /// Numbers separated by spaces, at full precision.
 fn join(v: &[f64]) -> String {
     v.iter()
@@ -157,5 +178,9 @@ mod tests {
         write_vtm(dir.path().join("scene.vtm"), &["image.vti", "mesh.vtu"]).unwrap();
         let vtm = std::fs::read_to_string(dir.path().join("scene.vtm")).unwrap();
         assert!(vtm.contains("file=\"mesh.vtu\"") && vtm.contains("name=\"image\""));
+        write_pvd(dir.path().join("scene.pvd"), &["image.vti", "mesh.vtu"]).unwrap();
+        let pvd = std::fs::read_to_string(dir.path().join("scene.pvd")).unwrap();
+        assert!(pvd.contains("type=\"Collection\""));
+        assert!(pvd.contains("part=\"1\" file=\"mesh.vtu\""), "{pvd}");
     }
 }
