@@ -5,9 +5,13 @@
 //! triple junctions (2D: how many) or junction curves (3D: their length).
 //!
 //! Counts, areas/volumes, intensities and pieces come from the label image
-//! (each pixel/voxel counted once); interfaces and junctions from the final
-//! mesh mapped into the world frame, so they are lengths and areas in space
-//! whatever the voxel shape.
+//! (each pixel/voxel counted once); the mesh area/volume of each phase (the
+//! exact sum of its cells' measures, in physical units) and the interfaces
+//! and junctions from the final mesh mapped into the world frame, so they are
+//! lengths and areas in space whatever the voxel shape. The two area/volume
+//! figures differ by the pixels/voxels the interface cuts (a fraction of the
+//! interface's pixel layer), so they agree closely on any segmentation whose
+//! phases are many pixels across.
 
 use crate::complex::{Complex, Label, VertexKind};
 use crate::dim::{D2, D3};
@@ -23,8 +27,13 @@ pub struct PhaseRow {
     pub phase: usize,
     /// Pixels/voxels labelled with it.
     pub count: usize,
-    /// Area (2D) or volume (3D) in the frame's unit squared/cubed.
+    /// Area (2D) or volume (3D) in the frame's unit squared/cubed: the
+    /// pixels/voxels labelled with it times the pixel area/voxel volume.
     pub measure: f64,
+    /// Area (2D) or volume (3D) of the phase's mesh cells in the frame's
+    /// unit (exact; `None` until [`Measurements::with_mesh_2d`] or
+    /// [`with_mesh_3d`](Measurements::with_mesh_3d) adds it).
+    pub mesh_measure: Option<f64>,
     /// Mean intensity (`None` for an empty phase).
     pub mean: Option<f64>,
     /// Standard deviation of the intensity (population).
@@ -99,6 +108,7 @@ impl Measurements {
                 phase: p,
                 count: count[p],
                 measure: count[p] as f64 * frame.voxel_measure(),
+                mesh_measure: None,
                 mean: mean[p].map(|m| map.original(m)),
                 std: mean[p].map(|_| map.scale.abs() * (sq[p] / count[p] as f64).sqrt()),
                 components: components[p],
@@ -127,6 +137,7 @@ impl Measurements {
             .iter()
             .map(|&[a, b]| distance(points[a as usize], points[b as usize]));
         self.interfaces = per_pair(&lines.phase, &lines.phase_other, sizes, order);
+        self.set_mesh_measures(&complex.phase_measures(), order, frame);
         let junctions = complex
             .vertex_ids()
             .filter(|&v| complex.class(v).kind == VertexKind::Junction)
@@ -151,6 +162,7 @@ impl Measurements {
             0.5 * distance(n, [0.0; 3])
         });
         self.interfaces = per_pair(&surface.phase, &surface.phase_other, sizes, order);
+        self.set_mesh_measures(&complex.phase_measures(), order, frame);
         let world = |v| {
             let p = complex.position(v);
             frame.domain_to_world([p.x, p.y, p.z])
@@ -164,21 +176,38 @@ impl Measurements {
         self
     }
 
+    /// Sets each phase's mesh area/volume from the per-label cell measures
+    /// of the mesh (`by_label`, in domain units), mapped to the world's units.
+    fn set_mesh_measures(&mut self, by_label: &[f64], order: &[u8], frame: &Frame) {
+        let used = if frame.dims[2] > 1 { 3 } else { 2 };
+        let domain_voxel: f64 = frame.domain_scale[..used].iter().product();
+        let to_world = frame.voxel_measure() / domain_voxel;
+        for row in &mut self.phases {
+            row.mesh_measure = Some(0.0);
+        }
+        for (label, &m) in by_label.iter().enumerate() {
+            let phase = order.get(label).map_or(label, |&o| o as usize);
+            if let Some(row) = self.phases.get_mut(phase) {
+                row.mesh_measure = Some(row.mesh_measure.unwrap_or(0.0) + m * to_world);
+            }
+        }
+    }
+
     /// `phases.csv`: one row per phase, measures in the frame's unit.
     pub fn phases_csv(&self, dimension: usize) -> String {
         let measure = if dimension == 2 { "area" } else { "volume" };
-        let mut out = format!(
-            "phase,count,{measure}_{}{dimension},mean,std,components\n",
-            self.unit
-        );
+        let unit = format!("{}{dimension}", self.unit);
+        let mut out =
+            format!("phase,count,{measure}_{unit},mesh_{measure}_{unit},mean,std,components\n");
         let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
         for r in &self.phases {
             let _ = writeln!(
                 out,
-                "{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{}",
                 r.phase,
                 r.count,
                 r.measure,
+                opt(r.mesh_measure),
                 opt(r.mean),
                 opt(r.std),
                 r.components
@@ -293,8 +322,10 @@ mod tests {
         assert!((m.phases[1].mean.unwrap() - 204.0).abs() < 1e-4);
         assert!(m.phases[1].std.unwrap() < 1e-4);
         let csv = m.phases_csv(2);
-        assert!(csv.starts_with("phase,count,area_mm2,mean,std,components\n0,16,16,"));
-        assert!(csv.contains("\n1,8,8,204.0000"), "{csv}");
+        assert!(
+            csv.starts_with("phase,count,area_mm2,mesh_area_mm2,mean,std,components\n0,16,16,,")
+        );
+        assert!(csv.contains("\n1,8,8,,204.0000"), "{csv}");
     }
 
     #[test]

@@ -12,6 +12,7 @@ mod figures;
 mod forces;
 mod generic;
 mod intensity;
+mod measures;
 mod physical;
 mod prop2d;
 mod reseed;
