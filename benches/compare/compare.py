@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """dsc-seg against its peers, side by side on the same phantoms with the same metric.
 
-Writes the phantoms with `dsc-seg phantom` (2D) and `dsc-seg phantom3d` (3D),
+Writes the phantoms with `dsc-seg phantom` (2D) and `dsc-seg phantom3d` (3D:
+two-phase shapes, three and four phases meeting along junction curves, and the
+four-class brain-like volume),
 segments each with `dsc-seg segment --phases K` / `dsc-seg segment3d` (all
 other options at their defaults) and with every peer of `peers.py` that
 handles its phase count and dimension, and scores every result against the
@@ -21,6 +23,7 @@ usage (from the repository root, after `cargo build --release` and
   python3 benches/compare/compare.py --out OUT            # the README's tables
   python3 benches/compare/compare.py --out OUT --only 2d --sizes 256 --sigmas 0.2 --repeat 1
   python3 benches/compare/compare.py --out OUT --only 3d --sizes3d 64 --methods3d mbo multi_otsu
+  python3 benches/compare/compare.py --out OUT --only 3d --sizes3d --brain 0.1 --methods3d mbo multi_otsu
   python3 benches/compare/compare.py --out OUT --only 2d --sizes 256 512 --sigmas 0.1 0.25 \
       --phantoms three_close four_close two_phase_specks four_phase_specks
 """
@@ -43,7 +46,11 @@ import score  # noqa: E402
 PHANTOMS_2D = {"two_phase": 2, "four_phase": 4}
 # Harder phantoms (--phantoms): close means, salt-and-pepper specks.
 PHANTOMS_2D_HARD = {"three_close": 3, "four_close": 4, "two_phase_specks": 2, "four_phase_specks": 4}
-PHANTOMS_3D = ["two_balls", "torus", "hollow_sphere"]
+# 3D phantoms (name -> phases): two-phase shapes, and three and four phases
+# meeting along junction curves.
+PHANTOMS_3D = {"two_balls": 2, "torus": 2, "hollow_sphere": 2, "three_phase": 3, "four_phase": 4}
+# The brain-like volume: four classes, 160 x 190 x 150 at --size 190.
+BRAIN_SIZE = 190
 # The 2D cases without --sizes/--sigmas: 256² and 512² at both noise levels,
 # 1024² at the higher one.
 DEFAULT_CASES_2D = [(256, 0.1), (256, 0.2), (512, 0.1), (512, 0.2), (1024, 0.2)]
@@ -170,6 +177,21 @@ def summary_table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def mbo_table(rows: list[dict]) -> str:
+    """3D: ours against the MBO scheme, and whether ours is at least as
+    accurate in at most its time."""
+    lines = ["| volume | dsc-seg Dice | dsc-seg s | iterations | tets | MBO Dice | MBO s | ≥ Dice, ≤ time |",
+             "|---|---|---|---|---|---|---|---|"]
+    for row in rows:
+        ours, mbo = row["dsc-seg"], row.get("mbo")
+        if mbo is None:
+            continue
+        holds = ours["mean_dice"] >= mbo["mean_dice"] and ours["time_s"] <= mbo["time_s"]
+        lines.append(f"| {row['image']} | {ours['mean_dice']:.4f} | {ours['time_s']:.2f} | {ours['iterations']} | "
+                     f"{ours['cells']} | {mbo['mean_dice']:.4f} | {mbo['time_s']:.2f} | {'yes' if holds else 'no'} |")
+    return "\n".join(lines)
+
+
 def memory_table(binary: str, out: str, sizes: list[int]) -> tuple[str, list[dict]]:
     """Peak memory of dsc-seg on large two-phase phantoms (σ = 0.2)."""
     lines = ["| two-phase phantom | peak MiB | segment s | iterations |", "|---|---|---|---|"]
@@ -198,8 +220,13 @@ def parse_args() -> argparse.Namespace:
     ap.add_argument("--sizes", type=int, nargs="+", help="2D sizes (default: 256 512 at both noise "
                     "levels and 1024 at 0.2)")
     ap.add_argument("--sigmas", type=float, nargs="+", help="2D noise levels (with --sizes; default 0.1 0.2)")
-    ap.add_argument("--sizes3d", type=int, nargs="+", default=[64, 128])
+    ap.add_argument("--sizes3d", type=int, nargs="*", default=[64, 128])
     ap.add_argument("--sigmas3d", type=float, nargs="+", default=[0.1, 0.2])
+    ap.add_argument("--phantoms3d", nargs="+", choices=list(PHANTOMS_3D), default=list(PHANTOMS_3D),
+                    help="3D phantoms (default: all)")
+    ap.add_argument("--brain", type=float, nargs="*", default=[0.1], metavar="SIGMA",
+                    help="noise levels of the brain-like volume (160 x 190 x 150, four classes; "
+                    "default 0.1; none to skip it)")
     ap.add_argument("--seed", type=int, default=1, help="noise seed of every phantom")
     ap.add_argument("--phantoms", nargs="+", choices=list(PHANTOMS_2D) + list(PHANTOMS_2D_HARD),
                     default=list(PHANTOMS_2D), help="2D phantoms (default: two_phase four_phase)")
@@ -241,16 +268,18 @@ def main() -> None:
         methods = [m for m in PEER_ORDER if any(m in r for r in results["two_d"])]
         print("## 2D\n\n" + summary_table(results["two_d"]) + "\n\n" + full_table(results["two_d"], methods) + "\n")
     if a.only != "2d":
-        for size in a.sizes3d:
-            for noise in a.sigmas3d:
-                for name in PHANTOMS_3D:
-                    row = case(a.bin, "3d", name, size, noise, 2, a.seed, a.out, a.repeat3d, a.methods3d)
-                    results["three_d"].append(row)
-                    save(results, a.out)
-                    print(f"{row['image']}: dsc-seg {cell(row['dsc-seg'])}", file=sys.stderr, flush=True)
+        volumes = [(name, size, noise) for size in a.sizes3d for noise in a.sigmas3d for name in a.phantoms3d]
+        volumes += [("brain", BRAIN_SIZE, noise) for noise in a.brain]
+        for name, size, noise in volumes:
+            phases = 4 if name == "brain" else PHANTOMS_3D[name]
+            row = case(a.bin, "3d", name, size, noise, phases, a.seed, a.out, a.repeat3d, a.methods3d)
+            results["three_d"].append(row)
+            save(results, a.out)
+            print(f"{row['image']}: dsc-seg {cell(row['dsc-seg'])}" + "".join(
+                f", {m} {cell(row[m])}" for m in a.methods3d if m in row), file=sys.stderr, flush=True)
         rows = results["three_d"]
         methods = [m for m in PEER_ORDER if any(m in r for r in rows)]
-        print("## 3D\n\n" + full_table(rows, methods) + "\n")
+        print("## 3D\n\n" + full_table(rows, methods) + "\n\n" + mbo_table(rows) + "\n")
         for method in ["dsc-seg"] + methods:
             dice = [r[method]["mean_dice"] for r in rows if method in r]
             if dice:

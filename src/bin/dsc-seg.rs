@@ -98,9 +98,10 @@ struct Segment3dArgs {
 #[derive(Parser, Debug)]
 #[command(allow_negative_numbers = true)]
 struct Phantom3dArgs {
-    /// two_balls, torus or hollow_sphere.
+    /// two_balls, torus, hollow_sphere (two phases), three_phase, four_phase
+    /// (junction curves) or brain (four classes, 160×190×150 at --size 190).
     name: String,
-    /// Side in voxels.
+    /// Side in voxels (the brain's longest side).
     #[arg(long, default_value_t = 64)]
     size: usize,
     /// Standard deviation of the additive Gaussian noise (intensities in [0,1]).

@@ -15,7 +15,9 @@
 //! This module depends on no other module of the crate.
 
 pub mod blur;
+pub mod brain3d;
 pub mod hard2d;
+pub mod junctions3d;
 pub mod noise;
 pub mod shapes2d;
 pub mod shapes3d;
@@ -203,6 +205,32 @@ impl Phantom3 {
             image,
             truth,
             phases: levels.len(),
+        }
+    }
+
+    /// Renders an arbitrary noise-free `f64` base volume (blur, noise,
+    /// clip, quantise per `opts`) and pairs it with the given ground truth.
+    pub fn from_base(
+        dims: [usize; 3],
+        base: Vec<f64>,
+        truth: Vec<u8>,
+        phases: usize,
+        opts: &RenderOptions,
+    ) -> Self {
+        let [nx, ny, nz] = dims;
+        assert_eq!(
+            truth.len(),
+            nx * ny * nz,
+            "truth size does not match dimensions"
+        );
+        let image = render(base, dims, opts);
+        Self {
+            nx,
+            ny,
+            nz,
+            image,
+            truth,
+            phases,
         }
     }
 
@@ -504,5 +532,66 @@ mod tests {
         let shell = hollow_sphere_labels(n);
         assert_eq!(components(&shell, d, 1), 1);
         assert_eq!(components(&shell, d, 0), 2);
+    }
+
+    /// Whether three distinct phases meet around some voxel corner (a 2×2×2
+    /// block holding all of `phases`): a junction curve passes there.
+    fn phases_meet(labels: &[u8], d: [usize; 3], phases: &[u8]) -> bool {
+        let at = |x: usize, y: usize, z: usize| labels[x + d[0] * (y + d[1] * z)];
+        (0..d[2] - 1).any(|z| {
+            (0..d[1] - 1).any(|y| {
+                (0..d[0] - 1).any(|x| {
+                    let block: Vec<u8> = (0..8)
+                        .map(|c| at(x + (c & 1), y + (c >> 1 & 1), z + (c >> 2)))
+                        .collect();
+                    phases.iter().all(|p| block.contains(p))
+                })
+            })
+        })
+    }
+
+    #[test]
+    fn multiphase_3d_phantoms_have_connected_phases_and_junctions() {
+        use super::brain3d::{brain_dims, brain_labels};
+        use super::junctions3d::{four_phase_labels, three_phase_labels};
+        let n = 40;
+        let d = [n, n, n];
+        let three = three_phase_labels(n);
+        for phase in 0..3 {
+            assert_eq!(components(&three, d, phase), 1, "three_phase {phase}");
+        }
+        assert!(phases_meet(&three, d, &[0, 1, 2]));
+        let four = four_phase_labels(n);
+        for phase in 0..4 {
+            assert_eq!(components(&four, d, phase), 1, "four_phase {phase}");
+        }
+        for triple in [[1, 2, 3], [0, 1, 2], [0, 2, 3], [0, 1, 3]] {
+            assert!(phases_meet(&four, d, &triple), "{triple:?}");
+        }
+        assert!(phases_meet(&four, d, &[0, 1, 2, 3]));
+        let size = 64;
+        let bd = brain_dims(size);
+        assert_eq!(bd, [54, 64, 51]);
+        assert_eq!(brain_dims(190), [160, 190, 150]);
+        let brain = brain_labels(size);
+        assert_eq!(brain.len(), bd.iter().product::<usize>());
+        let f = fractions(&brain, 4);
+        assert!(f.iter().all(|&v| v > 0.05), "{f:?}");
+        // The white matter is one folded piece; grey matter meets the
+        // background and the CSF where gyri reach the outline.
+        assert_eq!(components(&brain, bd, 3), 1);
+        assert!(phases_meet(&brain, bd, &[0, 1, 2]));
+        let biased = super::brain3d::brain(size, 0.0, 0);
+        let white: Vec<f32> = (0..brain.len())
+            .filter(|&i| brain[i] == 3)
+            .map(|i| biased.image[i])
+            .collect();
+        let (lo, hi) = white
+            .iter()
+            .fold((1f32, 0f32), |(a, b), &v| (a.min(v), b.max(v)));
+        assert!(
+            hi - lo > 0.1,
+            "the bias field spreads white matter: {lo}..{hi}"
+        );
     }
 }

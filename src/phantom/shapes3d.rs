@@ -1,7 +1,10 @@
 //! 3D two-phase phantoms on an `n³` grid (levels 0.3/0.7, 1.5 voxel blur,
-//! noise, 8-bit quantisation). Voxel `i` has normalised centre
-//! `(i + 0.5) / n`; storage is x fastest.
+//! noise, 8-bit quantisation), and [`Phantom3Kind`], every 3D phantom by
+//! name (with those of [`super::junctions3d`] and [`super::brain3d`]).
+//! Voxel `i` has normalised centre `(i + 0.5) / n`; storage is x fastest.
 
+use super::brain3d::brain;
+use super::junctions3d::{four_phase, three_phase};
 use super::{Phantom3, RenderOptions, TWO_PHASE_LEVELS};
 
 #[inline]
@@ -86,18 +89,36 @@ pub enum Phantom3Kind {
     Torus,
     /// [`hollow_sphere`].
     HollowSphere,
+    /// [`three_phase`]: three phases meeting along a junction curve.
+    ThreePhase,
+    /// [`four_phase`]: four phases, junction curves and points.
+    FourPhase,
+    /// [`brain`]: four classes in folded layers with a bias field
+    /// (`size` is the longest side; `160 × 190 × 150` at 190).
+    Brain,
 }
 
 impl Phantom3Kind {
     /// Every kind, in order.
-    pub const ALL: [Phantom3Kind; 3] = [Self::TwoBalls, Self::Torus, Self::HollowSphere];
+    pub const ALL: [Phantom3Kind; 6] = [
+        Self::TwoBalls,
+        Self::Torus,
+        Self::HollowSphere,
+        Self::ThreePhase,
+        Self::FourPhase,
+        Self::Brain,
+    ];
 
-    /// The command-line name (`two_balls`, `torus`, `hollow_sphere`).
+    /// The command-line name (`two_balls`, `torus`, `hollow_sphere`,
+    /// `three_phase`, `four_phase`, `brain`).
     pub fn name(self) -> &'static str {
         match self {
             Self::TwoBalls => "two_balls",
             Self::Torus => "torus",
             Self::HollowSphere => "hollow_sphere",
+            Self::ThreePhase => "three_phase",
+            Self::FourPhase => "four_phase",
+            Self::Brain => "brain",
         }
     }
 
@@ -107,17 +128,25 @@ impl Phantom3Kind {
         Self::ALL.into_iter().find(|k| k.name() == n)
     }
 
-    /// Number of phases (always 2).
+    /// Number of phases.
     pub fn phases(self) -> usize {
-        2
+        match self {
+            Self::TwoBalls | Self::Torus | Self::HollowSphere => 2,
+            Self::ThreePhase => 3,
+            Self::FourPhase | Self::Brain => 4,
+        }
     }
 
-    /// Generates the phantom (`n³`, noise `noise_sigma`, RNG `seed`).
+    /// Generates the phantom (`n³`, or longest side `n` for the brain;
+    /// noise `noise_sigma`, RNG `seed`).
     pub fn generate(self, n: usize, noise_sigma: f64, seed: u64) -> Phantom3 {
         match self {
             Self::TwoBalls => two_balls(n, noise_sigma, seed),
             Self::Torus => torus(n, noise_sigma, seed),
             Self::HollowSphere => hollow_sphere(n, noise_sigma, seed),
+            Self::ThreePhase => three_phase(n, noise_sigma, seed),
+            Self::FourPhase => four_phase(n, noise_sigma, seed),
+            Self::Brain => brain(n, noise_sigma, seed),
         }
     }
 }
