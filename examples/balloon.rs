@@ -60,7 +60,7 @@ pub fn scenario(size: usize, picture: Option<&Path>) -> Result<Outcome, SegmentE
     let models = Models::empty()
         .with_force(Balloon::new(1, 1.0).with_edge_stop(edges.clone(), 0.05))
         .with_force(EdgeAttraction::new(edges, 1.0))
-        .with_force(Rigidity);
+        .with_force(Rigidity::new(params.rigidity));
     let mut seg = Segmentation::<D2>::with_models(image, params, models)?;
     let initial = raw_labels(&seg);
     let report = seg.run(|_| {});

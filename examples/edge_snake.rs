@@ -75,7 +75,7 @@ pub fn scenario(size: usize, picture: Option<&Path>) -> Result<Outcome, SegmentE
     let edges = Arc::new(EdgeMap::new(&image, 1.5));
     let models = Models::empty()
         .with_force(EdgeAttraction::new(edges, 1.0))
-        .with_force(Rigidity);
+        .with_force(Rigidity::new(params.rigidity));
     let mut seg = Segmentation::<D2>::with_models(image, params, models)?;
     let report = seg.run(|_| {});
     if let Some(path) = picture {

@@ -51,8 +51,9 @@ pub fn scenario(size: usize, pictures: Option<(&Path, &Path)>) -> Result<Outcome
     // 5 px outside the ring's outer edge (ring centre (0.5, 0.4)·n, outer radius 0.28·n)
     let centre = (0.78 * n + 5.0, 0.40 * n);
     let volcano = Volcano::new(Vector2::new(centre.0, centre.1), 0.0, 8.0);
-    let models = Models::paper().with_force(volcano);
-    let mut seg = Segmentation::<D2>::with_models(image, SegmentParams::new(2), models)?;
+    let params = SegmentParams::new(2);
+    let models = Models::paper(&params).with_force(volcano);
+    let mut seg = Segmentation::<D2>::with_models(image, params, models)?;
     let background = Image2::from_raw(size, size, phantom.image.clone());
     let mut before = None;
     let mut erupted_at = 0;

@@ -86,8 +86,9 @@
 //! #     .collect();
 //! # let image = ImageView::new_2d(w, h, &pixels).unwrap();
 //! // The paper's evolution plus a user's repelling point, switched off for now.
-//! let models = Models2::paper().with_force(Volcano::new(Vector2::new(26.0, 16.0), 0.0, 4.0));
-//! let mut seg = Segmentation2::with_models(image, SegmentParams::new(2), models)?;
+//! let params = SegmentParams::new(2);
+//! let models = Models2::paper(&params).with_force(Volcano::new(Vector2::new(26.0, 16.0), 0.0, 4.0));
+//! let mut seg = Segmentation2::with_models(image, params, models)?;
 //! let mut frames = Vec::new();
 //! seg.run_until(|s, record| {
 //!     frames.push(s.label_image()); // a snapshot per iteration

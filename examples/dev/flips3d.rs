@@ -6,12 +6,12 @@
 //! `cargo run --release --example flips3d -- [two_balls|torus|hollow_sphere] [size] [sigma] [max_iterations]`
 //! (environment `FLIP_INTERVAL=k` and `FLIP_ONCE=0|1` override the 3D defaults).
 
-use dsc_seg::complex::Label;
+use dsc_seg::complex::{Complex3, Label};
 use dsc_seg::dim::D3;
 use dsc_seg::phantom::Phantom3Kind;
 use dsc_seg::pipeline::mean_dice;
 use dsc_seg::segment::{
-    ImageView, LabelContext, LabelRule, Models, Raster, SegmentParams, Segmentation,
+    ImageView, IterationState, LabelRule, Models, Raster, SegmentParams, Segmentation,
 };
 use std::sync::{Arc, Mutex};
 
@@ -32,23 +32,22 @@ impl LabelRule<D3> for Watch {
         "watch"
     }
 
-    fn relabel(&mut self, ctx: &mut LabelContext<'_, '_, D3>) -> usize {
+    fn relabel(&mut self, complex: &mut Complex3, state: &IterationState<'_, '_>) -> usize {
         // labels before the rule (Label::MAX for dead slots)
-        let mut before = vec![Label::MAX; ctx.complex.cell_capacity()];
-        for c in ctx.complex.cell_ids() {
-            before[c.index()] = ctx.complex.label(c);
+        let mut before = vec![Label::MAX; complex.cell_capacity()];
+        for c in complex.cell_ids() {
+            before[c.index()] = complex.label(c);
         }
         // interface cells before the rule
         let mut on_interface = vec![false; before.len()];
-        for c in ctx.complex.cell_ids() {
-            on_interface[c.index()] = ctx
-                .complex
+        for c in complex.cell_ids() {
+            on_interface[c.index()] = complex
                 .neighbours(c)
                 .iter()
                 .flatten()
                 .any(|nb| before[nb.index()] != before[c.index()]);
         }
-        let n = self.inner.relabel(ctx);
+        let n = self.inner.relabel(complex, state);
         if n == 0 {
             return 0;
         }
@@ -58,13 +57,13 @@ impl LabelRule<D3> for Watch {
         let (mut iface, mut toward, mut away, mut mixed) = (0, 0, 0, 0);
         let mut refl = 0;
         let mut vox = Vec::new();
-        for c in ctx.complex.cell_ids() {
+        for c in complex.cell_ids() {
             let i = c.index();
             let b = before.get(i).copied().unwrap_or(Label::MAX);
-            if b == Label::MAX || ctx.complex.label(c) == b {
+            if b == Label::MAX || complex.label(c) == b {
                 continue;
             }
-            let st = ctx.cells[i];
+            let st = state.cells[i];
             let k = match st.count {
                 0 => 0,
                 1..=2 => 1,
@@ -77,11 +76,11 @@ impl LabelRule<D3> for Watch {
                 iface += 1;
             }
             vox.clear();
-            let pts = ctx.complex.cell_points(c);
-            D3::cell_pixels(ctx.image, &pts[..4], &mut |p| vox.push(p));
+            let pts = complex.cell_points(c);
+            D3::cell_pixels(state.image, &pts[..4], &mut |p| vox.push(p));
             // truth label of the new phase: phase with the larger mean is 1
-            let m_new = ctx.phases.mean_of(ctx.complex.label(c)).unwrap_or(0.0);
-            let m_old = ctx.phases.mean_of(b).unwrap_or(0.0);
+            let m_new = state.phases.mean_of(complex.label(c)).unwrap_or(0.0);
+            let m_old = state.phases.mean_of(b).unwrap_or(0.0);
             let new_is_bright = m_new > m_old;
             let bright = vox.iter().filter(|&&p| log.truth[p] == 1).count();
             let frac = if vox.is_empty() {
@@ -108,7 +107,7 @@ impl LabelRule<D3> for Watch {
             "  {} at it {}: {n} flips; voxels 0/1-2/3-5/6-10/>10: {:?}; on interface {iface}; \
              toward truth {toward}, away {away}, straddling {mixed}; voxels flipped before {refl}",
             self.inner.name(),
-            ctx.iteration,
+            state.iteration,
             by_size
         );
         n
@@ -135,7 +134,7 @@ fn main() {
         truth: ph.truth.clone(),
         voxel_flips: vec![0; ph.truth.len()],
     }));
-    let mut models = Models::<D3>::paper();
+    let mut models = Models::<D3>::paper(&params);
     models.rules = std::mem::take(&mut models.rules)
         .into_iter()
         .map(|inner| {
@@ -150,7 +149,10 @@ fn main() {
     let t0 = std::time::Instant::now();
     let rep = seg.run_until(|s, r| {
         // the two parts of the displacement, in units of L, as the driver scales them
-        let f = s.field();
+        let Some(field) = s.paper_field() else {
+            return dsc_seg::segment::Flow::Stop;
+        };
+        let f = field.field();
         let l = s.dsc_params().edge_length;
         let norm = |v: &[nalgebra::Vector3<f64>]| v.iter().map(|x| x.norm()).fold(0.0, f64::max);
         let fmax = norm(&f.external);

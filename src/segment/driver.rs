@@ -2,29 +2,20 @@
 
 use super::adaptive::{AdaptiveSizing, Sizes};
 use super::error::SegmentError;
-use super::force_stage::{ForceInputs, ForceStage};
-use super::forces::ForceField;
+use super::force_stage::ForceStage;
 use super::image::ImageView;
 use super::integrate::{CellCache, CellStats, PhaseStats};
 use super::intensity::IntensityStats;
-use super::model::{Flow, InitContext, LabelContext, LabelView, Models};
-use super::params::{Init, SegmentParams};
+use super::model::{Flow, IterationState, Models};
+use super::models::{GivenMesh, PaperField};
+use super::params::SegmentParams;
 use super::raster::Raster;
 use super::reseed::{any_lost, lost_phases, merge_phase, split_worst_phase, LostPhase};
-use super::thresholds::split_histogram;
 use crate::complex::Complex;
 use crate::dsc::{DscParams, DscWorkspace};
 use serde::Serialize;
 use spin_join::SpinHelper;
 use std::time::Instant;
-
-/// Largest stable coefficient of the explicit bending step (see [`Segmentation::step`]).
-pub const MAX_BENDING_STEP: f64 = 0.2;
-/// Most sub-steps a smoothing term takes in one iteration (the default β
-/// needs at most 5).
-pub const MAX_SUBSTEPS: f64 = 64.0;
-/// Largest stable coefficient of the explicit stretching (umbrella) step.
-pub const MAX_STRETCHING_STEP: f64 = 0.5;
 
 /// Iterations without a new lowest energy after which the step is halved.
 pub const STALL_ITERATIONS: usize = 10;
@@ -46,7 +37,8 @@ pub struct IterationRecord {
     pub max_displacement: f64,
     /// Phase means the forces used.
     pub means: Vec<Option<f64>>,
-    /// Triple junctions with an external force, and crossings without.
+    /// Triple junctions with an external force, and crossings without (of
+    /// the paper's region force; `(0, 0)` without it).
     pub junctions: (usize, usize),
     /// Cells of the mesh after the iteration.
     #[serde(default)]
@@ -69,22 +61,16 @@ pub enum StopReason {
     Stopped,
 }
 
-/// The force stage's inputs, borrowed from a segmentation's fields (a
-/// macro, so that the stage and the models stay free to borrow mutably).
-macro_rules! force_inputs {
-    ($s:expr, $iteration:expr) => {
-        ForceInputs {
-            complex: &$s.complex,
-            image: &$s.image,
-            phases: &$s.phases,
-            cells: &$s.cells,
-            params: &$s.params,
-            range: $s.range,
-            edge_length: $s.dsc.edge_length,
-            step: $s.step,
-            iteration: $iteration,
-        }
-    };
+/// A segmentation split into disjoint borrows: the state the models read
+/// and the parts they, or the force stage, change.
+struct Parts<'s, 'a, K: Raster> {
+    state: IterationState<'s, 'a>,
+    complex: &'s mut Complex<K>,
+    force: &'s mut ForceStage<K>,
+    models: &'s mut Models<K>,
+    helper: &'s SpinHelper,
+    /// The current step fraction.
+    step: f64,
 }
 
 /// The driver's second thread ([`SpinHelper`]): one if rayon may use more
@@ -161,8 +147,8 @@ pub struct SegmentReport {
     /// The input's intensity figures (range, robust range, noise estimate).
     pub intensity: IntensityStats,
     /// The thresholds of the initialisation, in the input's units: the
-    /// histogram split of [`Init::Histogram`], the interval bounds of
-    /// [`Init::Range`]; empty for the other initialisations.
+    /// histogram split of [`Init::Histogram`](super::params::Init::Histogram), the interval bounds of
+    /// [`Init::Range`](super::params::Init::Range); empty for the other initialisations.
     pub initial_thresholds: Vec<f64>,
     /// Lost phases re-seeded during the run (see [`crate::segment::reseed`]).
     pub reseeds: usize,
@@ -211,6 +197,9 @@ pub struct Segmentation<'a, K: Raster> {
     deform_workspace: DscWorkspace<K>,
     /// The sizing field of adaptive resolution (`None`: uniform at `L`).
     adaptive: Option<AdaptiveSizing>,
+    /// Force evaluations so far (the last one's number is the state's
+    /// [`IterationState::evaluation`] of the forces that moved the mesh).
+    evaluations: u64,
     /// Whether the label rules can predict their changes
     /// ([`LabelRule::would_relabel`](super::model::LabelRule::would_relabel)) so that
     /// they are checked beside the forces.
@@ -233,7 +222,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// The paper's segmentation ([`Models::paper`]): validates the input,
     /// builds the mesh at edge length L and initialises the labels.
     pub fn new(image: ImageView<'a>, params: SegmentParams) -> Result<Self, SegmentError> {
-        Self::with_models(image, params, Models::paper())
+        let models = Models::paper(&params);
+        Self::with_models(image, params, models)
     }
 
     /// A segmentation running the given models (see [`Models`]): validates the
@@ -244,7 +234,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         params: SegmentParams,
         models: Models<K>,
     ) -> Result<Self, SegmentError> {
-        Self::build(image, params, models, None)
+        Self::build(image, params, models)
     }
 
     /// Starts the paper's models from a given complex (e.g. one conforming to
@@ -256,14 +246,14 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         params: SegmentParams,
         complex: Complex<K>,
     ) -> Result<Self, SegmentError> {
-        Self::build(image, params, Models::paper(), Some(complex))
+        let models = Models::paper(&params).with_init(GivenMesh::new(complex));
+        Self::with_models(image, params, models)
     }
 
     fn build(
         image: ImageView<'a>,
         params: SegmentParams,
         mut models: Models<K>,
-        preset: Option<Complex<K>>,
     ) -> Result<Self, SegmentError> {
         let t0 = Instant::now();
         if image.is_empty() {
@@ -297,9 +287,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
         let l = params.resolved_edge_length_in(image.dims, image.spacing);
         let dsc = DscParams::new::<K>(l);
-        let given = preset.is_some();
         let sizes = (params.sizing.adaptive).then(|| params.sizing.sizes(&image.dims[..K::N], l));
-        let mut complex = match preset {
+        let mut complex = match models.init.start_mesh() {
             Some(c) => c,
             None => K::box_complex(&image, sizes.map_or(l, |s| s.start))?,
         };
@@ -314,30 +303,22 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let helper = Helper::new();
         cell_cache.integrate_on(helper.here(), &complex, &image, &mut cells);
         let intensity = IntensityStats::of(&image);
-        let classes = (!given && params.init == Init::Histogram)
-            .then(|| split_histogram(&intensity.cell_histogram(&cells), params.phases));
-        let initial_thresholds = match (&classes, &params.init) {
-            (Some(c), _) => c.thresholds.clone(),
-            (None, Init::Range) if !given => {
-                let n = params.phases as f64;
-                (1..params.phases)
-                    .map(|k| range.0 + (range.1 - range.0) * k as f64 / n)
-                    .collect()
-            }
-            _ => Vec::new(),
-        };
-        let mut hints = if given {
-            vec![None; params.phases]
-        } else {
-            models.init.initialise(&mut InitContext {
-                complex: &mut complex,
+        let mut hints = models.init.initialise(
+            &mut complex,
+            &IterationState {
                 image: &image,
+                intensity: &intensity,
+                phases: &PhaseStats::new(params.phases),
                 cells: &cells,
                 params: &params,
                 range,
-                classes: classes.as_ref(),
-            })?
-        };
+                edge_length: l,
+                length_weight: 0.0,
+                iteration: 0,
+                evaluation: 0,
+            },
+        )?;
+        let initial_thresholds = models.init.thresholds();
         if let Some(c) = complex
             .cell_ids()
             .find(|&c| complex.label(c) as usize >= params.phases)
@@ -369,6 +350,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             force,
             deform_workspace: DscWorkspace::new(),
             adaptive,
+            evaluations: 0,
             predict_flips: true,
             nu: 0.0,
             range,
@@ -455,10 +437,11 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.nu
     }
 
-    /// The paper's per-vertex fields (region force, bending, umbrella) from
-    /// the last iteration.
-    pub fn field(&self) -> &ForceField<K> {
-        &self.force.field
+    /// The field of the paper's force terms ([`Models::paper`]) as the last
+    /// force evaluation computed it (region force, bending and umbrella
+    /// directions); `None` if no term computed it then.
+    pub fn paper_field(&self) -> Option<&PaperField<K>> {
+        self.models.paper_field(self.evaluations)
     }
 
     /// The current step fraction (the parameter, halved when the energy stalls).
@@ -556,7 +539,10 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             flips,
             max_displacement: max_disp / l,
             means: self.phases.mean.clone(),
-            junctions: self.force.field.junctions,
+            junctions: self
+                .models
+                .paper_field(self.evaluations)
+                .map_or((0, 0), |f| f.field().junctions),
             cells: self.complex.cell_count(),
             edge_lengths: self
                 .adaptive
@@ -587,8 +573,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
 
     /// What the next [`step`](Self::step) does before it deforms, without
     /// its flips: the image statistics of the current complex (cached, so
-    /// only moved cells are integrated) and the force stage, which fills
-    /// [`field`](Self::field), runs every force term and sets the
+    /// only moved cells are integrated) and the force stage, which runs
+    /// every force term (a new force evaluation: the paper's terms compute
+    /// their field again, see [`paper_field`](Self::paper_field)) and sets the
     /// destinations. Nothing moves. Returns the largest requested
     /// displacement in units of L. For benchmarks (a second call measures
     /// the forces, the statistics then being unchanged) and inspection; a
@@ -662,21 +649,42 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         done
     }
 
+    /// The segmentation split into the state every model reads (for force
+    /// evaluation `self.evaluations`) and the parts the models change.
+    fn parts(&mut self, iteration: usize) -> Parts<'_, 'a, K> {
+        Parts {
+            state: IterationState {
+                image: &self.image,
+                intensity: &self.intensity,
+                phases: &self.phases,
+                cells: &self.cells,
+                params: &self.params,
+                range: self.range,
+                edge_length: self.dsc.edge_length,
+                length_weight: self.nu,
+                iteration,
+                evaluation: self.evaluations,
+            },
+            complex: &mut self.complex,
+            force: &mut self.force,
+            models: &mut self.models,
+            helper: self.helper.here(),
+            step: self.step,
+        }
+    }
+
     /// Runs the label rules; returns how many cells changed label.
     fn relabel(&mut self, iteration: usize) -> usize {
         let t = Instant::now();
-        let mut ctx = LabelContext {
-            complex: &mut self.complex,
-            image: &self.image,
-            cells: &self.cells,
-            phases: &self.phases,
-            params: &self.params,
-            length_weight: self.nu,
-            iteration,
-        };
+        let Parts {
+            state,
+            complex,
+            models,
+            ..
+        } = self.parts(iteration);
         let mut flips = 0;
-        for rule in &mut self.models.rules {
-            flips += rule.relabel(&mut ctx);
+        for rule in &mut models.rules {
+            flips += rule.relabel(complex, &state);
         }
         if flips > 0 {
             self.phases.update(&self.complex, &self.cells);
@@ -690,30 +698,27 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// label ([`would_relabel`](super::model::LabelRule::would_relabel); a rule that cannot tell counts
     /// as yes, and turns these predictions off for the run).
     fn forces_beside_flip_check(&mut self, iteration: usize) -> ((f64, f64), bool) {
-        let input = force_inputs!(self, iteration);
-        let view = LabelView {
-            complex: &self.complex,
-            image: &self.image,
-            cells: &self.cells,
-            phases: &self.phases,
-            params: &self.params,
-            length_weight: self.nu,
-            iteration,
-        };
-        let (force, terms, rules) = (
-            &mut self.force,
-            &mut self.models.forces,
-            &mut self.models.rules,
-        );
-        let (computed, answers) = self.helper.here().join(
-            || force.run(terms, &input),
+        self.evaluations += 1;
+        let Parts {
+            state,
+            complex,
+            force,
+            models,
+            helper,
+            step,
+        } = self.parts(iteration);
+        let complex = &*complex;
+        let (terms, rules) = (&mut models.forces, &mut models.rules);
+        let (max_disp, answers) = helper.join(
+            || force.run(terms, complex, &state, step),
             || {
                 rules
                     .iter_mut()
-                    .map(|r| r.would_relabel(&view))
+                    .map(|r| r.would_relabel(complex, &state))
                     .try_fold(false, |any, a| a.map(|a| any || a))
             },
         );
+        let computed = (self.interface_length(), max_disp);
         match answers {
             Some(would_flip) => (computed, would_flip),
             None => {
@@ -727,8 +732,31 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// destinations; returns the interface measure and the largest
     /// displacement (pixels).
     fn forces_and_destinations(&mut self, iteration: usize) -> (f64, f64) {
-        let input = force_inputs!(self, iteration);
-        self.force.run(&mut self.models.forces, &input)
+        self.evaluations += 1;
+        let Parts {
+            state,
+            complex,
+            force,
+            models,
+            step,
+            ..
+        } = self.parts(iteration);
+        let max_disp = force.run(&mut models.forces, complex, &state, step);
+        (self.interface_length(), max_disp)
+    }
+
+    /// The interface measure of the current mesh for the energy's length
+    /// term: summed facet by facet along [`Complex::interface_facets`], or
+    /// taken from the paper's field when the last force evaluation computed
+    /// it (the same sum in the same order).
+    fn interface_length(&self) -> f64 {
+        match self.models.paper_field(self.evaluations) {
+            Some(f) => f.field().interface_measure,
+            None => self
+                .complex
+                .interface_facets()
+                .fold(0.0, |total, f| total + f.measure),
+        }
     }
 
     /// Whether the stopping rule is met.

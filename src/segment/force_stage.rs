@@ -1,39 +1,20 @@
-//! The force stage of an iteration: the paper's fields, every force term,
-//! the step and the destinations of the deformation.
+//! The force stage of an iteration: every force term, the step and the
+//! destinations of the deformation.
 
-use super::driver::MAX_SUBSTEPS;
-use super::forces::{ForceField, ForceSettings};
-use super::image::ImageView;
-use super::integrate::{CellStats, PhaseStats};
-use super::model::{ForceContext, ForceTerm, TermKind};
-use super::params::SegmentParams;
+use super::model::{ForceTerm, IterationState, TermKind};
 use super::raster::Raster;
 use crate::complex::{Complex, VertexId};
 use crate::dim::Point;
 use crate::dsc::Destinations;
 
-/// What the force stage reads.
-pub(crate) struct ForceInputs<'r, 'a, K: Raster> {
-    pub complex: &'r Complex<K>,
-    pub image: &'r ImageView<'a>,
-    pub phases: &'r PhaseStats,
-    pub cells: &'r [CellStats],
-    pub params: &'r SegmentParams,
-    /// The image's dynamic range `(min, max)`.
-    pub range: (f64, f64),
-    /// L, in pixels.
-    pub edge_length: f64,
-    /// The current step fraction.
-    pub step: f64,
-    pub iteration: usize,
-}
+/// Most sub-steps a smoothing term takes in one iteration (the default β
+/// needs at most 5).
+pub const MAX_SUBSTEPS: f64 = 64.0;
 
 /// What the force stage writes, kept between iterations (no allocation per
 /// iteration once the mesh stops growing).
 #[derive(Debug)]
 pub(crate) struct ForceStage<K: Raster> {
-    /// The paper's per-vertex fields.
-    pub field: ForceField<K>,
     /// One force buffer per force term, indexed by vertex id.
     buffers: Vec<Vec<K::Point>>,
     /// Sum of the external terms.
@@ -51,7 +32,6 @@ impl<K: Raster> ForceStage<K> {
     /// Empty buffers; destinations sized for `complex`.
     pub fn new(complex: &Complex<K>) -> Self {
         ForceStage {
-            field: ForceField::new(),
             buffers: Vec::new(),
             external: Vec::new(),
             displacement: Vec::new(),
@@ -61,57 +41,17 @@ impl<K: Raster> ForceStage<K> {
         }
     }
 
-    /// Computes the fields and every term's forces and fills the
-    /// destinations; returns the interface measure and the largest
-    /// displacement (pixels).
+    /// Computes every term's forces on `complex` and fills the destinations
+    /// with a step of `step`·L; returns the largest displacement (pixels).
     pub fn run(
         &mut self,
         terms: &mut [Box<dyn ForceTerm<K>>],
-        input: &ForceInputs<'_, '_, K>,
-    ) -> (f64, f64) {
-        let l = input.edge_length;
-        let settings = ForceSettings {
-            model: input.params.force,
-            junction: input.params.junction_force,
-            spacing: input.params.sample_spacing,
-            equal_means: 1e-6 * (input.range.1 - input.range.0),
-        };
-        self.field
-            .compute(input.complex, input.image, input.phases, &settings);
-        let length = self.field.interface_measure;
-        // Every term adds into its own buffer; external terms are summed.
-        let nv = input.complex.vertex_capacity();
-        let ctx = ForceContext {
-            complex: input.complex,
-            image: input.image,
-            phases: input.phases,
-            cells: input.cells,
-            params: input.params,
-            field: &self.field,
-            edge_length: l,
-            range: input.range,
-            iteration: input.iteration,
-        };
-        self.buffers.resize_with(terms.len(), Vec::new);
-        self.external.clear();
-        self.external.resize(nv, K::Point::zero());
-        let mut reference: Option<f64> = None;
-        let mut kinds = std::mem::take(&mut self.term_kinds);
-        kinds.clear();
-        for (term, buf) in terms.iter_mut().zip(&mut self.buffers) {
-            buf.clear();
-            buf.resize(nv, K::Point::zero());
-            term.add_forces(&ctx, buf);
-            let kind = term.kind(ctx.params);
-            if kind == TermKind::External {
-                let r = term.reference_magnitude(&ctx);
-                reference = Some(reference.map_or(r, |x: f64| x.max(r)));
-                for (e, f) in self.external.iter_mut().zip(buf.iter()) {
-                    *e += *f;
-                }
-            }
-            kinds.push(kind);
-        }
+        complex: &Complex<K>,
+        state: &IterationState<'_, '_>,
+        step: f64,
+    ) -> f64 {
+        let l = state.edge_length;
+        let reference = self.add_terms(terms, complex, state);
         // Step: the largest external displacement is `step`·L once a force
         // reaches the reference magnitude (1 for eq. 6: a pixel exactly at a
         // mean); weaker fields move proportionally less, so the evolution can
@@ -123,13 +63,45 @@ impl<K: Raster> ForceStage<K> {
         // β weighs the same against the region force at every step size.
         let fmax = self.external.iter().map(|f| f.length()).fold(0.0, f64::max);
         let denom = fmax.max(reference.unwrap_or(1.0));
-        let scale = input.step * l / if denom > 0.0 { denom } else { 1.0 };
+        let scale = step * l / if denom > 0.0 { denom } else { 1.0 };
         self.displacement.clear();
         self.displacement
             .extend(self.external.iter().map(|&f| f * scale));
+        let kinds = std::mem::take(&mut self.term_kinds);
         self.add_smoothing(terms, &kinds, scale, l);
         self.term_kinds = kinds;
-        (length, self.set_destinations(input.complex))
+        self.set_destinations(complex)
+    }
+
+    /// Every term adds into its own buffer, and the external ones are summed;
+    /// returns the largest reference magnitude of the external terms.
+    fn add_terms(
+        &mut self,
+        terms: &mut [Box<dyn ForceTerm<K>>],
+        complex: &Complex<K>,
+        state: &IterationState<'_, '_>,
+    ) -> Option<f64> {
+        let nv = complex.vertex_capacity();
+        self.buffers.resize_with(terms.len(), Vec::new);
+        self.external.clear();
+        self.external.resize(nv, K::Point::zero());
+        self.term_kinds.clear();
+        let mut reference: Option<f64> = None;
+        for (term, buf) in terms.iter_mut().zip(&mut self.buffers) {
+            buf.clear();
+            buf.resize(nv, K::Point::zero());
+            term.add_forces(complex, state, buf);
+            let kind = term.kind();
+            if kind == TermKind::External {
+                let r = term.reference_magnitude(state);
+                reference = Some(reference.map_or(r, |x: f64| x.max(r)));
+                for (e, f) in self.external.iter_mut().zip(buf.iter()) {
+                    *e += *f;
+                }
+            }
+            self.term_kinds.push(kind);
+        }
+        reference
     }
 
     /// Adds the smoothing terms to the displacement: term `b` with
@@ -151,9 +123,7 @@ impl<K: Raster> ForceStage<K> {
             let k = (scale * weight / l).min(max_step * MAX_SUBSTEPS);
             let substeps = (k / max_step).ceil().max(1.0);
             let buf = &self.buffers[b];
-            if substeps == 1.0
-                || !term.apply_to(&mut self.field, &self.displacement, &mut self.applied)
-            {
+            if substeps == 1.0 || !term.apply_to(&self.displacement, &mut self.applied) {
                 let k = k.min(max_step);
                 for (d, f) in self.displacement.iter_mut().zip(buf) {
                     *d += *f * k;
@@ -163,7 +133,7 @@ impl<K: Raster> ForceStage<K> {
             let k = k / substeps;
             for sub in 0..substeps as usize {
                 if sub > 0 {
-                    term.apply_to(&mut self.field, &self.displacement, &mut self.applied);
+                    term.apply_to(&self.displacement, &mut self.applied);
                 }
                 for ((d, f), a) in self.displacement.iter_mut().zip(buf).zip(&self.applied) {
                     *d += (*f + *a) * k;

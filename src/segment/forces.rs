@@ -219,8 +219,10 @@ impl<K: Raster> ForceField<K> {
         }
     }
 
-    /// Computes the external, bending and stretching terms of every vertex of `complex`.
-    #[allow(clippy::needless_range_loop)] // corners and their points are indexed in pairs
+    /// Computes the external, bending and stretching terms of every vertex of
+    /// `complex`, in four stages: what each vertex is, the facets' region
+    /// force and boundary neighbours, the smoothing directions, and each
+    /// vertex's external force.
     pub fn compute(
         &mut self,
         complex: &Complex<K>,
@@ -228,6 +230,18 @@ impl<K: Raster> ForceField<K> {
         phases: &PhaseStats,
         s: &ForceSettings,
     ) {
+        #[cfg(test)]
+        tests::COMPUTATIONS.with(|c| c.set(c.get() + 1));
+        self.classify_vertices(complex);
+        self.integrate_facets(complex, image, phases, s);
+        self.smoothing_directions(complex);
+        self.resolve_external(s.junction);
+    }
+
+    /// Stage 1: every vertex's [`ForceKind`]; the accumulators of the
+    /// interface vertices reset (junction slots in increasing label order,
+    /// for eq. 7) and the output arrays zeroed.
+    fn classify_vertices(&mut self, complex: &Complex<K>) {
         let nv = complex.vertex_capacity();
         let empty = Acc {
             np: 0,
@@ -243,8 +257,6 @@ impl<K: Raster> ForceField<K> {
             buf.clear();
             buf.resize(nv, K::Point::zero());
         }
-        self.facets.clear();
-        self.interface_measure = 0.0;
         self.junctions = (0, 0);
         self.kinds.clear();
         self.kinds.resize(nv, ForceKind::Off);
@@ -274,8 +286,22 @@ impl<K: Raster> ForceField<K> {
                 _ => {}
             }
         }
+    }
 
-        // Pass 1: region forces and boundary neighbours, facet by facet.
+    /// Stage 2, facet by facet along the interface: the interface measure,
+    /// the boundary neighbours of each phase, the junctions' outward normals
+    /// per phase, and the region force of eqs. (5)–(7) sampled along the
+    /// facet and spread over its corners with the hat weights.
+    #[allow(clippy::needless_range_loop)] // corners and their points are indexed in pairs
+    fn integrate_facets(
+        &mut self,
+        complex: &Complex<K>,
+        image: &ImageView<'_>,
+        phases: &PhaseStats,
+        s: &ForceSettings,
+    ) {
+        self.facets.clear();
+        self.interface_measure = 0.0;
         let nf = K::N; // corners per facet
         for facet in complex.interface_facets() {
             let InterfaceFacet {
@@ -355,8 +381,11 @@ impl<K: Raster> ForceField<K> {
                 }
             });
         }
+    }
 
-        // Umbrellas and bending: the boundary Laplacian applied twice.
+    /// Stage 3: the umbrella `ΔX` and the bending direction `−Δ²X`, the
+    /// boundary Laplacian applied once and twice to the positions.
+    fn smoothing_directions(&mut self, complex: &Complex<K>) {
         self.fill_facet_slots();
         self.active.clear();
         for (i, &kind) in self.kinds.iter().enumerate() {
@@ -381,8 +410,13 @@ impl<K: Raster> ForceField<K> {
         }
         self.stretching = umbrella;
         self.bending = bending;
+    }
 
-        for i in 0..nv {
+    /// Stage 4: each interface vertex's external force, its integrated
+    /// region force over its share of the interface (eq. 6), or at a triple
+    /// junction the eq. (7) weights along the phases' outward normals.
+    fn resolve_external(&mut self, junction: JunctionForce) {
+        for i in 0..self.kinds.len() {
             let acc = &self.acc[i];
             let mut f = K::Point::zero();
             // (Off first: the other vertices' accumulators are stale)
@@ -390,7 +424,7 @@ impl<K: Raster> ForceField<K> {
                 ForceKind::Off => continue,
                 ForceKind::Interface if acc.share > 0.0 => f += acc.ext * (1.0 / acc.share),
                 ForceKind::TripleJunction
-                    if acc.share > 0.0 && s.junction == JunctionForce::EdgeLocal =>
+                    if acc.share > 0.0 && junction == JunctionForce::EdgeLocal =>
                 {
                     f += acc.ext * (1.0 / acc.share)
                 }
@@ -521,5 +555,20 @@ fn junction_weights<P: Point>(acc: &mut Acc<P>, phases: &PhaseStats, intensity: 
         (Some((lo, _)), None) => acc.weight[lo] += wk,
         (None, Some((hi, _))) => acc.weight[hi] += wk,
         (None, None) => {}
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use std::cell::Cell;
+
+    thread_local! {
+        /// How many times [`super::ForceField::compute`] ran on this thread.
+        pub(crate) static COMPUTATIONS: Cell<usize> = const { Cell::new(0) };
+    }
+
+    /// Computations of the paper's field on this thread so far.
+    pub(crate) fn computations() -> usize {
+        COMPUTATIONS.with(Cell::get)
     }
 }

@@ -63,8 +63,7 @@ pub use error::SegmentError;
 pub use image::ImageView;
 pub use integrate::{CellStats, PhaseStats};
 pub use model::{
-    phase_normals, Flow, ForceContext, ForceTerm, InitContext, Initialiser, LabelContext,
-    LabelRule, LabelView, Models, TermKind,
+    phase_normals, Flow, ForceTerm, Initialiser, IterationState, LabelRule, Models, TermKind,
 };
 pub use params::{
     default_edge_length, ForceModel, Init, InitBall, InitDisk, JunctionForce, SegmentParams,

@@ -8,29 +8,32 @@
 //! 2. runs every [`LabelRule`] in order (if
 //!    [`SegmentParams::label_flips`] is on) and refreshes the phase means;
 //! 3. asks every [`ForceTerm`] to add its per-vertex force into a slice
-//!    indexed by [`VertexId::index`](crate::complex::VertexId::index), given a read-only [`ForceContext`];
+//!    indexed by [`VertexId::index`](crate::complex::VertexId::index);
 //! 4. sums the terms, normalises the step (see [`TermKind`]) and deforms the
 //!    complex with the DSC.
 //!
-//! The paper's own evolution is written against these traits: the region
-//! force of eqs. (5)–(7) is [`RegionForce`], the
-//! rigidity and elasticity terms of eq. (2) are
-//! [`Rigidity`] and
-//! [`Elasticity`], the label flips are
-//! [`CellFlips`] and
-//! [`ComponentFlips`], and the initialisation
-//! from [`SegmentParams::init`] is [`ParamsInit`].
+//! Every hook sees the complex (mutable where it may change labels) and one
+//! [`IterationState`]: the image, its statistics and the parameters, borrowed
+//! for the call. A term owns its own parameters and scratch space.
+//!
+//! The paper's own evolution is written against these traits, in
+//! [`models::paper`](super::models::paper): the region force of eqs. (5)–(7)
+//! is [`RegionForce`](super::models::RegionForce), the rigidity and elasticity terms of eq. (2) are
+//! [`Rigidity`](super::models::Rigidity) and [`Elasticity`](super::models::Elasticity) (the three share one lazily computed field
+//! per iteration), the label flips are [`CellFlips`] and [`ComponentFlips`],
+//! and the initialisation from [`SegmentParams::init`] is [`ParamsInit`].
 //! [`Models::paper`] bundles them; [`Segmentation::new`](super::Segmentation::new)
-//! uses it.
+//! uses it. [`Models::empty`] has none of them, and computes none of their
+//! fields.
 
 use super::error::SegmentError;
-use super::forces::ForceField;
 use super::image::ImageView;
 use super::integrate::{CellStats, PhaseStats};
-use super::models::{CellFlips, ComponentFlips, Elasticity, ParamsInit, RegionForce, Rigidity};
+use super::intensity::IntensityStats;
+use super::models::paper::{PaperField, PaperTerms};
+use super::models::{CellFlips, ComponentFlips, ParamsInit};
 use super::params::SegmentParams;
 use super::raster::Raster;
-use super::thresholds::Classes;
 use crate::complex::{Complex, Label};
 use crate::dim::Point;
 use std::any::Any;
@@ -58,60 +61,54 @@ pub enum TermKind {
     },
 }
 
-/// What a force term may read: the state at the start of the force stage of
-/// one iteration (after integration and label flips).
-pub struct ForceContext<'c, 'a, K: Raster> {
-    /// The complex (labels, positions, vertex classes).
-    pub complex: &'c Complex<K>,
+/// What every hook of the evolution reads besides the complex: the state
+/// of the segmentation at the call (after integration; for the force terms,
+/// after the label flips too), borrowed for the call.
+#[derive(Clone, Copy)]
+pub struct IterationState<'s, 'a> {
     /// The image.
-    pub image: &'c ImageView<'a>,
-    /// Per-phase pixel counts, sums and means.
-    pub phases: &'c PhaseStats,
+    pub image: &'s ImageView<'a>,
+    /// The image's intensity figures (range, robust range, noise, histogram).
+    pub intensity: &'s IntensityStats,
+    /// Per-phase pixel counts, sums and means (no means yet for an
+    /// initialiser).
+    pub phases: &'s PhaseStats,
     /// Per-cell sums, indexed by cell id.
-    pub cells: &'c [CellStats],
+    pub cells: &'s [CellStats],
     /// The parameters (possibly changed mid-run by the caller).
-    pub params: &'c SegmentParams,
-    /// The paper's per-vertex fields of this iteration: the region force of
-    /// eqs. (5)–(7), the bending and umbrella directions, the interface
-    /// measure and the vertex kinds. Computed once per iteration by the driver
-    /// (it also gives the energy's length term); terms may reuse it.
-    pub field: &'c ForceField<K>,
-    /// The average edge length L of the complex, in pixels.
-    pub edge_length: f64,
+    pub params: &'s SegmentParams,
     /// The image's dynamic range `(min, max)`.
     pub range: (f64, f64),
-    /// The iteration being computed, from 1.
+    /// The average edge length L of the complex, in pixels.
+    pub edge_length: f64,
+    /// The length weight ν of the Mumford–Shah energy (intensity² per pixel
+    /// of length; 0 before the first iteration).
+    pub length_weight: f64,
+    /// The iteration being computed, from 1 (0: the initialisation).
     pub iteration: usize,
+    /// A number that differs between any two force evaluations of a run (a
+    /// term caching work per state keys it on this).
+    pub evaluation: u64,
 }
 
-impl<K: Raster> ForceContext<'_, '_, K> {
-    /// Fills `out` (indexed by vertex id, resized to the vertex capacity) with
-    /// the unit outward normal of `phase` at every vertex on its boundary: the
-    /// measure-weighted average of the normals of the interface facets between
-    /// `phase` and any other phase, pointing out of `phase`. Vertices not on
-    /// the boundary of `phase` get zero. The domain border does not count as
-    /// boundary.
-    pub fn phase_normals(&self, phase: Label, out: &mut Vec<K::Point>) {
-        phase_normals(self.complex, phase, out);
-    }
-}
-
-impl<K: Raster> ForceContext<'_, '_, K> {
-    /// A force integrated over the interface facets, the route of the paper's
-    /// region force: every interface facet between phases `a` (one side) and
-    /// `b` (the other) is sampled about every [`SegmentParams::sample_spacing`]
-    /// pixels; the scalar `f(point, a, b)` of each sample, times the facet's
-    /// unit normal `N_ab` (pointing from `a` into `b`), is spread over the
-    /// facet's corners with the hat weights, and each vertex's total is divided
-    /// by its hat-weighted share of the interface measure. The result, a
-    /// force per unit length (area), is added into `out`. `scratch` is reused
-    /// between calls, so a term that keeps it allocates nothing per iteration.
+impl IterationState<'_, '_> {
+    /// A force integrated over the interface facets of `complex`, the route
+    /// of the paper's region force: every interface facet between phases `a`
+    /// (one side) and `b` (the other) is sampled about every
+    /// [`SegmentParams::sample_spacing`] pixels; the scalar `f(point, a, b)`
+    /// of each sample, times the facet's unit normal `N_ab` (pointing from
+    /// `a` into `b`), is spread over the facet's corners with the hat
+    /// weights, and each vertex's total is divided by its hat-weighted share
+    /// of the interface measure. The result, a force per unit length (area),
+    /// is added into `out`. `scratch` is reused between calls, so a term that
+    /// keeps it allocates nothing per iteration.
     ///
     /// For example `f = (2·I(p) − m_a − m_b)/(m_a − m_b)` is eq. (6) on
     /// two-phase interfaces, and `f = ±p` for `a` or `b` the inflated phase a
     /// balloon.
-    pub fn add_facet_integrated(
+    pub fn add_facet_integrated<K: Raster>(
         &self,
+        complex: &Complex<K>,
         mut f: impl FnMut(K::Point, Label, Label) -> f64,
         scratch: &mut Vec<(K::Point, f64)>,
         out: &mut [K::Point],
@@ -120,7 +117,7 @@ impl<K: Raster> ForceContext<'_, '_, K> {
         scratch.clear();
         scratch.resize(out.len(), (K::Point::zero(), 0.0));
         let n = K::N;
-        for facet in self.complex.interface_facets() {
+        for facet in complex.interface_facets() {
             let (a, b, normal, corners) = (facet.a, facet.b, facet.normal, facet.corners);
             K::facet_samples(
                 &facet.points[..n],
@@ -147,7 +144,12 @@ impl<K: Raster> ForceContext<'_, '_, K> {
     }
 }
 
-/// See [`ForceContext::phase_normals`].
+/// Fills `out` (indexed by vertex id, resized to the vertex capacity) with
+/// the unit outward normal of `phase` at every vertex on its boundary: the
+/// measure-weighted average of the normals of the interface facets between
+/// `phase` and any other phase, pointing out of `phase`. Vertices not on the
+/// boundary of `phase` get zero. The domain border does not count as
+/// boundary.
 pub fn phase_normals<K: Raster>(complex: &Complex<K>, phase: Label, out: &mut Vec<K::Point>) {
     out.clear();
     out.resize(complex.vertex_capacity(), K::Point::zero());
@@ -201,118 +203,99 @@ impl<T: Any> AsAny for T {
 /// A per-vertex force: the external or internal forces of eq. (1).
 ///
 /// Implement [`ForceTerm::add_forces`]; the driver zeroes one buffer per term,
-/// calls it, and combines the terms as [`ForceTerm::kind`] says. A term may
-/// keep scratch space or state in `self` (it is `&mut`), and may be reached
-/// mid-run through [`Segmentation::force_mut`](super::Segmentation::force_mut).
+/// calls it, and combines the terms as [`ForceTerm::kind`] says. A term owns
+/// its parameters and may keep scratch space or state in `self` (it is
+/// `&mut`); it may be reached mid-run through
+/// [`Segmentation::force_mut`](super::Segmentation::force_mut).
+///
+/// A user's force, pulling every interface vertex towards a point:
 ///
 /// ```
-/// use dsc_seg::segment::{ForceContext, ForceTerm, Raster};
+/// use dsc_seg::complex::Complex;
+/// use dsc_seg::dim::D2;
+/// use dsc_seg::segment::{ForceTerm, ImageView, IterationState, Models2, SegmentParams};
+/// use dsc_seg::segment::Segmentation2;
+/// use nalgebra::Vector2;
 ///
-/// /// Pushes every vertex on the boundary of phase 1 outwards with magnitude `p`.
-/// struct Inflate(f64);
+/// /// Pulls interface vertices towards `centre` with unit strength.
+/// struct Pull {
+///     centre: Vector2<f64>,
+/// }
 ///
-/// impl<K: Raster> ForceTerm<K> for Inflate {
-///     fn name(&self) -> &str { "inflate" }
-///     fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
-///         let mut normals = Vec::new();
-///         ctx.phase_normals(1, &mut normals);
-///         for (f, n) in out.iter_mut().zip(&normals) {
-///             *f += *n * self.0;
+/// impl ForceTerm<D2> for Pull {
+///     fn name(&self) -> &str {
+///         "pull"
+///     }
+///     fn add_forces(&mut self, complex: &Complex<D2>, _: &IterationState, out: &mut [Vector2<f64>]) {
+///         for v in complex.vertex_ids().filter(|&v| complex.class(v).on_interface()) {
+///             out[v.index()] += (self.centre - complex.position(v)).normalize();
 ///         }
 ///     }
 /// }
+///
+/// let pixels: Vec<f32> = (0..32 * 32).map(|i| if i % 32 < 16 { 0.2 } else { 0.8 }).collect();
+/// let image = ImageView::new_2d(32, 32, &pixels).unwrap();
+/// let models = Models2::empty().with_force(Pull { centre: Vector2::new(16.0, 16.0) });
+/// let mut seg = Segmentation2::with_models(image, SegmentParams::new(2), models)?;
+/// assert!(seg.step().max_displacement > 0.0);
+/// # Ok::<(), dsc_seg::segment::SegmentError>(())
 /// ```
 pub trait ForceTerm<K: Raster>: AsAny + Send {
     /// A short name for reports and debugging.
     fn name(&self) -> &str;
 
     /// How the driver scales this term; [`TermKind::External`] by default.
-    fn kind(&self, _params: &SegmentParams) -> TermKind {
+    fn kind(&self) -> TermKind {
         TermKind::External
     }
 
     /// The force magnitude that moves a vertex a full step (see
     /// [`TermKind::External`]); 1 by default, i.e. the scale of the
     /// normalised region force of eq. (6). Ignored for smoothing terms.
-    fn reference_magnitude(&self, _ctx: &ForceContext<'_, '_, K>) -> f64 {
+    fn reference_magnitude(&self, _state: &IterationState<'_, '_>) -> f64 {
         1.0
     }
 
     /// Adds this term's force at every vertex into `out`, indexed by
-    /// [`VertexId::index`](crate::complex::VertexId::index) (`out.len()` is the vertex capacity; dead vertices
-    /// are ignored by the driver). Vertices on the domain border are later
-    /// constrained to slide along it.
+    /// [`VertexId::index`](crate::complex::VertexId::index) (`out.len()` is
+    /// the vertex capacity; dead vertices are ignored by the driver).
+    /// Vertices on the domain border are later constrained to slide along it.
     ///
     /// Called once per iteration, or twice when the label rules, checked
     /// beside this computation, turn out to change labels (the forces are
     /// then computed again on the new labels; see
     /// [`LabelRule::would_relabel`]), and so are [`kind`](Self::kind),
     /// [`reference_magnitude`](Self::reference_magnitude) and
-    /// [`apply_to`](Self::apply_to): the forces should be a function of `ctx`.
-    fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]);
+    /// [`apply_to`](Self::apply_to): the forces should be a function of the
+    /// complex and the state.
+    fn add_forces(
+        &mut self,
+        complex: &Complex<K>,
+        state: &IterationState<'_, '_>,
+        out: &mut [K::Point],
+    );
 
     /// For a [`TermKind::Smoothing`] term whose direction is linear in the
     /// positions (the umbrella `ΔX`, the bending `−Δ²X`): writes the term's
-    /// operator applied to the displacement field `input` into `out` and
-    /// returns true. The driver then splits a coefficient above `max_step`
-    /// into stable sub-steps instead of capping it, so the weight keeps its
-    /// meaning at every step size. `field` is the driver's force field,
-    /// lent mutably for its scratch space. The default (false) caps the
-    /// coefficient.
-    fn apply_to(
-        &mut self,
-        _field: &mut ForceField<K>,
-        _input: &[K::Point],
-        _out: &mut Vec<K::Point>,
-    ) -> bool {
+    /// operator, as of the last [`add_forces`](Self::add_forces), applied to
+    /// the displacement field `input` into `out` and returns true. The driver
+    /// then splits a coefficient above `max_step` into stable sub-steps
+    /// instead of capping it, so the weight keeps its meaning at every step
+    /// size. The default (false) caps the coefficient.
+    fn apply_to(&mut self, _input: &[K::Point], _out: &mut Vec<K::Point>) -> bool {
         false
     }
-}
-
-/// What a label rule may read and change.
-pub struct LabelContext<'c, 'a, K: Raster> {
-    /// The complex, whose cell labels the rule may change
-    /// ([`Complex::set_label`], [`Complex::set_labels`]).
-    pub complex: &'c mut Complex<K>,
-    /// The image.
-    pub image: &'c ImageView<'a>,
-    /// Per-cell sums, indexed by cell id (from the start of the iteration).
-    pub cells: &'c [CellStats],
-    /// Phase statistics (refreshed by the driver after the rules if any flipped).
-    pub phases: &'c PhaseStats,
-    /// The parameters.
-    pub params: &'c SegmentParams,
-    /// The length weight ν of the Mumford–Shah energy (intensity² per pixel of length).
-    pub length_weight: f64,
-    /// The iteration being computed, from 1.
-    pub iteration: usize,
-}
-
-/// What a label rule reads to predict whether it would change a label
-/// ([`LabelRule::would_relabel`]): a [`LabelContext`] that cannot change any.
-pub struct LabelView<'c, 'a, K: Raster> {
-    /// The complex.
-    pub complex: &'c Complex<K>,
-    /// The image.
-    pub image: &'c ImageView<'a>,
-    /// Per-cell sums, indexed by cell id.
-    pub cells: &'c [CellStats],
-    /// Phase statistics.
-    pub phases: &'c PhaseStats,
-    /// The parameters.
-    pub params: &'c SegmentParams,
-    /// The length weight ν of the Mumford–Shah energy.
-    pub length_weight: f64,
-    /// The iteration being computed, from 1.
-    pub iteration: usize,
 }
 
 /// A rule that changes cell labels (the paper's label flips, section III.C).
 pub trait LabelRule<K: Raster>: AsAny + Send {
     /// A short name for reports and debugging.
     fn name(&self) -> &str;
-    /// Changes labels; returns how many cells changed.
-    fn relabel(&mut self, ctx: &mut LabelContext<'_, '_, K>) -> usize;
+    /// Changes labels of `complex` ([`Complex::set_label`],
+    /// [`Complex::set_labels`]); returns how many cells changed. The state's
+    /// cell sums are from the start of the iteration; its phase statistics
+    /// are refreshed by the driver after the rules if any changed.
+    fn relabel(&mut self, complex: &mut Complex<K>, state: &IterationState<'_, '_>) -> usize;
     /// Whether [`relabel`](Self::relabel) would change a label now, decided
     /// without changing any; `None` (the default) if the rule cannot tell.
     /// A rule that answers must have a `relabel` without any other effect
@@ -322,50 +305,58 @@ pub trait LabelRule<K: Raster>: AsAny + Send {
     /// asks them on its second thread while it computes the forces, and runs
     /// the rules (and the forces again) only if one of them would change a
     /// label: the same result, the rules' time hidden behind the forces'.
-    fn would_relabel(&mut self, view: &LabelView<'_, '_, K>) -> Option<bool> {
-        let _ = view;
+    fn would_relabel(
+        &mut self,
+        complex: &Complex<K>,
+        state: &IterationState<'_, '_>,
+    ) -> Option<bool> {
+        let _ = (complex, state);
         None
     }
 }
 
-/// What an initialisation may read and change.
-pub struct InitContext<'c, 'a, K: Raster> {
-    /// The freshly built complex, every cell labelled 0.
-    pub complex: &'c mut Complex<K>,
-    /// The image.
-    pub image: &'c ImageView<'a>,
-    /// Per-cell sums of the initial mesh, indexed by cell id.
-    pub cells: &'c [CellStats],
-    /// The (validated) parameters.
-    pub params: &'c SegmentParams,
-    /// The image's dynamic range `(min, max)`.
-    pub range: (f64, f64),
-    /// The histogram split into `params.phases` classes (for
-    /// [`Init::Histogram`](super::params::Init::Histogram); `None` otherwise).
-    pub classes: Option<&'c Classes>,
-}
-
-/// Labels the cells before the evolution starts.
+/// Builds or labels the first mesh before the evolution starts: the only
+/// way a segmentation is initialised.
 pub trait Initialiser<K: Raster>: Send {
-    /// Labels the cells of `ctx.complex` with values `< params.phases` and
-    /// returns a starting mean per phase where one is known before
-    /// integration (`None` otherwise; the driver then uses the pixels' means).
+    /// A mesh to start from instead of the box mesh at L (e.g. one conforming
+    /// to a surface), whose labels are the initialisation; asked once, before
+    /// the image is integrated. `None` (the default): the box mesh.
+    fn start_mesh(&mut self) -> Option<Complex<K>> {
+        None
+    }
+
+    /// Labels the cells of `complex` (freshly built, every cell labelled 0,
+    /// unless [`start_mesh`](Self::start_mesh) gave it) with values
+    /// `< state.params.phases` and returns a starting mean per phase where
+    /// one is known before integration (`None` otherwise; the driver then
+    /// uses the pixels' means). The state's cell sums are of this mesh; it
+    /// has no phase means yet.
     fn initialise(
         &mut self,
-        ctx: &mut InitContext<'_, '_, K>,
+        complex: &mut Complex<K>,
+        state: &IterationState<'_, '_>,
     ) -> Result<Vec<Option<f64>>, SegmentError>;
+
+    /// The intensity thresholds the initialisation drew, in the input's
+    /// units, for the report; none by default.
+    fn thresholds(&self) -> Vec<f64> {
+        Vec::new()
+    }
 }
 
-/// Any closure `FnMut(&mut InitContext) -> Result<…>` is an initialiser.
+/// Any closure `FnMut(&mut Complex, &IterationState) -> Result<…>` is an
+/// initialiser of the box mesh.
 impl<K: Raster, F> Initialiser<K> for F
 where
-    F: FnMut(&mut InitContext<'_, '_, K>) -> Result<Vec<Option<f64>>, SegmentError> + Send,
+    F: FnMut(&mut Complex<K>, &IterationState<'_, '_>) -> Result<Vec<Option<f64>>, SegmentError>
+        + Send,
 {
     fn initialise(
         &mut self,
-        ctx: &mut InitContext<'_, '_, K>,
+        complex: &mut Complex<K>,
+        state: &IterationState<'_, '_>,
     ) -> Result<Vec<Option<f64>>, SegmentError> {
-        self(ctx)
+        self(complex, state)
     }
 }
 
@@ -378,34 +369,44 @@ pub struct Models<K: Raster> {
     pub rules: Vec<Box<dyn LabelRule<K>>>,
     /// The initialisation.
     pub init: Box<dyn Initialiser<K>>,
+    /// The field the paper's terms share, for the records' junction counts.
+    paper_field: Option<PaperField<K>>,
 }
 
 impl<K: Raster> Models<K> {
-    /// The paper's evolution: [`RegionForce`], [`Rigidity`], [`Elasticity`]
-    /// (weights from the parameters), [`CellFlips`] then [`ComponentFlips`],
-    /// initialised by [`ParamsInit`] (i.e. [`SegmentParams::init`]).
-    pub fn paper() -> Self {
+    /// The paper's evolution with the weights and settings of `params`:
+    /// [`RegionForce`](super::models::RegionForce), [`Rigidity`](super::models::Rigidity), [`Elasticity`](super::models::Elasticity) (sharing one field per
+    /// iteration), [`CellFlips`] then [`ComponentFlips`], initialised by
+    /// [`ParamsInit`] (i.e. [`SegmentParams::init`]). The terms keep their
+    /// parameters: change them mid-run through
+    /// [`force_mut`](Self::force_mut), not through the `SegmentParams`.
+    pub fn paper(params: &SegmentParams) -> Self {
+        let PaperTerms {
+            region,
+            rigidity,
+            elasticity,
+        } = PaperTerms::new(params);
+        let field = region.field().clone();
         Models {
-            forces: vec![
-                Box::new(RegionForce),
-                Box::new(Rigidity),
-                Box::new(Elasticity),
-            ],
+            forces: vec![Box::new(region), Box::new(rigidity), Box::new(elasticity)],
             rules: vec![
                 Box::new(CellFlips::default()),
                 Box::new(ComponentFlips::default()),
             ],
-            init: Box::new(ParamsInit),
+            init: Box::new(ParamsInit::default()),
+            paper_field: Some(field),
         }
     }
 
     /// No force and no label rule, initialised by [`ParamsInit`]: start from
-    /// here to build an evolution from scratch.
+    /// here to build an evolution from scratch. Nothing of the paper's
+    /// forces is computed.
     pub fn empty() -> Self {
         Models {
             forces: Vec::new(),
             rules: Vec::new(),
-            init: Box::new(ParamsInit),
+            init: Box::new(ParamsInit::default()),
+            paper_field: None,
         }
     }
 
@@ -440,11 +441,13 @@ impl<K: Raster> Models<K> {
             .iter_mut()
             .find_map(|r| r.as_mut().as_any_mut().downcast_mut::<T>())
     }
-}
 
-impl<K: Raster> Default for Models<K> {
-    fn default() -> Self {
-        Self::paper()
+    /// The field shared by [`Models::paper`]'s terms, if they computed it
+    /// for force evaluation `evaluation` (see [`IterationState::evaluation`]).
+    pub fn paper_field(&self, evaluation: u64) -> Option<&PaperField<K>> {
+        self.paper_field
+            .as_ref()
+            .filter(|f| f.computed_for() == Some(evaluation))
     }
 }
 
@@ -456,4 +459,46 @@ pub enum Flow {
     Continue,
     /// Stop now.
     Stop,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dim::D2;
+    use crate::segment::forces::tests::computations;
+    use crate::segment::Segmentation;
+
+    /// Runs 3 iterations of `models` on a two-phase image; returns how many
+    /// times the paper's field was computed.
+    fn paper_field_computations(models: Models<D2>) -> usize {
+        // One thread: the helper runs inline, so every computation is counted here.
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let pixels: Vec<f32> = (0..32 * 32)
+                .map(|i| if i % 32 < 12 { 0.2 } else { 0.8 })
+                .collect();
+            let image = ImageView::new_2d(32, 32, &pixels).unwrap();
+            let before = computations();
+            let mut seg = Segmentation::with_models(image, SegmentParams::new(2), models).unwrap();
+            for _ in 0..3 {
+                seg.step();
+            }
+            computations() - before
+        })
+    }
+
+    #[test]
+    fn empty_models_compute_no_paper_field() {
+        let params = SegmentParams::new(2);
+        // the paper's three terms share one computation per force evaluation
+        let paper = paper_field_computations(Models::paper(&params));
+        assert!((3..=6).contains(&paper), "{paper} computations");
+        assert_eq!(paper_field_computations(Models::empty()), 0);
+        // a rule alone computes no force field either
+        let rules = Models::empty().with_rule(CellFlips::default());
+        assert_eq!(paper_field_computations(rules), 0);
+    }
 }

@@ -89,9 +89,10 @@ fn volcano_dents_the_interface_near_it_only() {
 /// custom label rule, a custom stopping rule, parameters changed mid-run.
 #[test]
 fn custom_models_and_observer_drive_the_same_loop() {
+    use dsc_seg::complex::Complex2;
     use dsc_seg::dim::D2;
     use dsc_seg::segment::{
-        Flow, ImageView, InitContext, LabelContext, LabelRule, Models, SegmentError, SegmentParams,
+        Flow, ImageView, IterationState, LabelRule, Models, SegmentError, SegmentParams,
         Segmentation,
     };
 
@@ -101,7 +102,7 @@ fn custom_models_and_observer_drive_the_same_loop() {
         fn name(&self) -> &str {
             "count"
         }
-        fn relabel(&mut self, _ctx: &mut LabelContext<'_, '_, D2>) -> usize {
+        fn relabel(&mut self, _: &mut Complex2, _: &IterationState<'_, '_>) -> usize {
             self.0 += 1;
             0
         }
@@ -112,15 +113,15 @@ fn custom_models_and_observer_drive_the_same_loop() {
         .map(|i| if i % w < w / 2 { 0.2 } else { 0.8 })
         .collect();
     let image = ImageView::new_2d(w, h, &pixels).unwrap();
-    let right_half = |ctx: &mut InitContext<'_, '_, D2>| {
+    let right_half = |complex: &mut Complex2, state: &IterationState<'_, '_>| {
         let mut changes = Vec::new();
-        for c in ctx.complex.cell_ids() {
-            let p = ctx.complex.cell_points(c);
+        for c in complex.cell_ids() {
+            let p = complex.cell_points(c);
             let x = (p[0].x + p[1].x + p[2].x) / 3.0;
             changes.push((c, u32::from(x > 12.0)));
         }
-        ctx.complex.set_labels(&changes);
-        Ok::<_, SegmentError>(vec![None; ctx.params.phases])
+        complex.set_labels(&changes);
+        Ok::<_, SegmentError>(vec![None; state.params.phases])
     };
     let models = Models::empty().with_init(right_half).with_rule(Count(0));
     let mut seg = Segmentation::<D2>::with_models(image, SegmentParams::new(2), models).unwrap();
@@ -143,15 +144,16 @@ fn custom_models_and_observer_drive_the_same_loop() {
     assert!(report.history.iter().all(|r| r.max_displacement == 0.0));
 
     // an initialiser that produces a label beyond the phases is an error
-    let bad = |ctx: &mut InitContext<'_, '_, D2>| {
-        let c = ctx.complex.cell_ids().next().unwrap();
-        ctx.complex.set_label(c, 5);
+    let bad = |complex: &mut Complex2, _: &IterationState<'_, '_>| {
+        let c = complex.cell_ids().next().unwrap();
+        complex.set_label(c, 5);
         Ok::<_, SegmentError>(Vec::new())
     };
+    let params = SegmentParams::new(2);
     let err = Segmentation::<D2>::with_models(
         image,
-        SegmentParams::new(2),
-        Models::paper().with_init(bad),
+        params.clone(),
+        Models::paper(&params).with_init(bad),
     );
     assert!(matches!(err, Err(SegmentError::Init(_))));
 }
@@ -160,28 +162,37 @@ fn custom_models_and_observer_drive_the_same_loop() {
 /// and points like the balloon's vertex normals for a constant pressure.
 #[test]
 fn facet_integrated_forces_match_the_region_force_and_the_normals() {
+    use dsc_seg::complex::Complex2;
     use dsc_seg::dim::{Point, D2};
+    use dsc_seg::segment::models::{PaperField, RegionForce};
     use dsc_seg::segment::{
-        ForceContext, ForceTerm, ImageView, Models, Raster, SegmentParams, Segmentation,
+        phase_normals, ForceTerm, ImageView, IterationState, Models, Raster, SegmentParams,
+        Segmentation,
     };
     use nalgebra::Vector2;
     use std::sync::{Arc, Mutex};
 
     type Seen = Arc<Mutex<Vec<(f64, f64)>>>;
     /// Compares, at every two-phase interface vertex, eq. (6) integrated
-    /// here with the field's region force, and a unit pressure with the normals.
-    struct Probe(Seen);
+    /// here with the paper's region force, and a unit pressure with the normals.
+    struct Probe(Seen, PaperField<D2>);
     impl ForceTerm<D2> for Probe {
         fn name(&self) -> &str {
             "probe"
         }
-        fn add_forces(&mut self, ctx: &ForceContext<'_, '_, D2>, _out: &mut [Vector2<f64>]) {
-            let nv = ctx.complex.vertex_capacity();
+        fn add_forces(
+            &mut self,
+            complex: &Complex2,
+            state: &IterationState<'_, '_>,
+            _out: &mut [Vector2<f64>],
+        ) {
+            let nv = complex.vertex_capacity();
             let (mut eq6, mut push) = (vec![Vector2::zeros(); nv], vec![Vector2::zeros(); nv]);
             let mut scratch = Vec::new();
-            let img = ctx.image;
-            let ph = ctx.phases;
-            ctx.add_facet_integrated(
+            let img = state.image;
+            let ph = state.phases;
+            state.add_facet_integrated(
+                complex,
                 |p, a, b| {
                     let (ma, mb) = (ph.mean_of(a).unwrap(), ph.mean_of(b).unwrap());
                     (2.0 * D2::sample(img, p) - ma - mb) / (ma - mb)
@@ -189,21 +200,25 @@ fn facet_integrated_forces_match_the_region_force_and_the_normals() {
                 &mut scratch,
                 &mut eq6,
             );
-            ctx.add_facet_integrated(
+            state.add_facet_integrated(
+                complex,
                 |_, a, _| if a == 1 { 1.0 } else { -1.0 },
                 &mut scratch,
                 &mut push,
             );
             let mut normals = Vec::new();
-            ctx.phase_normals(1, &mut normals);
+            phase_normals(complex, 1, &mut normals);
             let mut seen = self.0.lock().unwrap();
-            for v in ctx.complex.vertex_ids() {
-                let k = ctx.complex.class(v);
+            // the region force, computed for this evaluation by the term before
+            assert_eq!(self.1.computed_for(), Some(state.evaluation));
+            let field = self.1.field();
+            for v in complex.vertex_ids() {
+                let k = complex.class(v);
                 if k.kind != dsc_seg::complex::VertexKind::Interface || k.on_boundary() {
                     continue;
                 }
                 let i = v.index();
-                let region = ctx.field.external[i];
+                let region = field.external[i];
                 seen.push((
                     (eq6[i] - region).length() / region.length().max(1e-9),
                     push[i].dot(&normals[i]) / push[i].length().max(1e-12),
@@ -225,8 +240,15 @@ fn facet_integrated_forces_match_the_region_force_and_the_normals() {
         .collect();
     let image = ImageView::new_2d(w, h, &pixels).unwrap();
     let seen: Seen = Arc::default();
-    let models = Models::paper().with_force(Probe(seen.clone()));
-    let mut seg = Segmentation::<D2>::with_models(image, SegmentParams::new(2), models).unwrap();
+    let params = SegmentParams::new(2);
+    let mut models = Models::paper(&params);
+    let field = models
+        .force_mut::<RegionForce<D2>>()
+        .unwrap()
+        .field()
+        .clone();
+    let models = models.with_force(Probe(seen.clone(), field));
+    let mut seg = Segmentation::<D2>::with_models(image, params, models).unwrap();
     seg.step();
     seg.step();
     let seen = seen.lock().unwrap();

@@ -381,9 +381,10 @@ fn absurd_rigidity_is_capped_not_stalled() {
 /// which the driver runs before the forces every iteration.
 #[test]
 fn predicted_flips_give_the_run_of_rules_run_every_iteration() {
+    use dsc_seg::complex::Complex2;
     use dsc_seg::dim::D2;
     use dsc_seg::segment::{
-        ImageView, LabelContext, LabelRule, Models, SegmentParams, Segmentation,
+        ImageView, IterationState, LabelRule, Models, SegmentParams, Segmentation,
     };
     /// A rule that hides its predictions.
     struct Opaque(Box<dyn LabelRule<D2>>);
@@ -391,8 +392,8 @@ fn predicted_flips_give_the_run_of_rules_run_every_iteration() {
         fn name(&self) -> &str {
             self.0.name()
         }
-        fn relabel(&mut self, ctx: &mut LabelContext<'_, '_, D2>) -> usize {
-            self.0.relabel(ctx)
+        fn relabel(&mut self, complex: &mut Complex2, state: &IterationState<'_, '_>) -> usize {
+            self.0.relabel(complex, state)
         }
     }
     let p = dsc_seg::phantom::shapes2d::four_phase(96, 0.25, 3);
@@ -406,8 +407,8 @@ fn predicted_flips_give_the_run_of_rules_run_every_iteration() {
         seg.run(|_| {});
         (seg.history().to_vec(), seg.label_image())
     };
-    let (predicted, labels) = run(Models::paper());
-    let mut opaque = Models::paper();
+    let (predicted, labels) = run(Models::paper(&params));
+    let mut opaque = Models::paper(&params);
     opaque.rules = opaque
         .rules
         .into_iter()

@@ -7,8 +7,9 @@
 //! balloon.
 
 use super::edge::EdgeMap;
+use crate::complex::Complex;
 use crate::complex::Label;
-use crate::segment::model::{ForceContext, ForceTerm};
+use crate::segment::model::{phase_normals, ForceTerm, IterationState};
 use crate::segment::raster::Raster;
 use std::sync::Arc;
 
@@ -48,13 +49,18 @@ impl<K: Raster> ForceTerm<K> for Balloon<K::Point> {
         "balloon"
     }
 
-    fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
-        ctx.phase_normals(self.phase, &mut self.normals);
-        for v in ctx.complex.vertex_ids() {
+    fn add_forces(
+        &mut self,
+        complex: &Complex<K>,
+        _state: &IterationState<'_, '_>,
+        out: &mut [K::Point],
+    ) {
+        phase_normals(complex, self.phase, &mut self.normals);
+        for v in complex.vertex_ids() {
             let n = self.normals[v.index()];
             let mut p = self.pressure;
             if let Some((map, k)) = &self.edge_stop {
-                p /= 1.0 + map.potential::<K>(ctx.complex.position(v)) / k;
+                p /= 1.0 + map.potential::<K>(complex.position(v)) / k;
             }
             out[v.index()] += n * p;
         }

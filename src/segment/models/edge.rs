@@ -7,11 +7,12 @@
 //! once for any dimension (central differences along every axis of extent
 //! > 1, interpolation by [`Raster::sample`]).
 
+use crate::complex::Complex;
 use crate::complex::VertexKind;
 use crate::dim::Point;
 use crate::phantom::blur::gaussian_blur_3d;
 use crate::segment::image::ImageView;
-use crate::segment::model::{ForceContext, ForceTerm};
+use crate::segment::model::{ForceTerm, IterationState};
 use crate::segment::raster::Raster;
 use std::sync::Arc;
 
@@ -129,12 +130,17 @@ impl<K: Raster> ForceTerm<K> for EdgeAttraction {
         "edge attraction"
     }
 
-    fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
-        for v in ctx.complex.vertex_ids() {
-            if ctx.complex.class(v).kind == VertexKind::Interior {
+    fn add_forces(
+        &mut self,
+        complex: &Complex<K>,
+        _state: &IterationState<'_, '_>,
+        out: &mut [K::Point],
+    ) {
+        for v in complex.vertex_ids() {
+            if complex.class(v).kind == VertexKind::Interior {
                 continue;
             }
-            let g = self.map.gradient::<K>(ctx.complex.position(v));
+            let g = self.map.gradient::<K>(complex.position(v));
             out[v.index()] += g * self.weight;
         }
     }

@@ -17,5 +17,8 @@ pub mod volcano;
 
 pub use balloon::Balloon;
 pub use edge::{EdgeAttraction, EdgeMap};
-pub use paper::{CellFlips, ComponentFlips, Elasticity, ParamsInit, RegionForce, Rigidity};
+pub use paper::{
+    CellFlips, ComponentFlips, Elasticity, GivenMesh, PaperField, PaperTerms, ParamsInit,
+    RegionForce, Rigidity,
+};
 pub use volcano::Volcano;

@@ -1,26 +1,156 @@
-//! The paper's evolution as models: thin adapters over [`ForceField`],
-//! [`Flipper`] and [`initialise`], whose numerics they do not touch.
-//!
-//! [`ForceField`]: crate::segment::forces::ForceField
+//! The paper's evolution as models: the region force, rigidity and
+//! elasticity (sharing one lazily computed [`ForceField`] per force
+//! evaluation), the label flips of [`Flipper`] and the initialisations of
+//! [`initialise`], whose numerics they do not touch.
 
+use crate::complex::Complex;
 use crate::dim::Point;
 use crate::segment::cluster_flips::ClusterFlipper;
-use crate::segment::driver::{MAX_BENDING_STEP, MAX_STRETCHING_STEP};
 use crate::segment::error::SegmentError;
 use crate::segment::flips::Flipper;
-use crate::segment::forces::ForceField;
+use crate::segment::forces::{ForceField, ForceSettings};
 use crate::segment::init::initialise;
-use crate::segment::model::{
-    ForceContext, ForceTerm, InitContext, Initialiser, LabelContext, LabelRule, LabelView, TermKind,
-};
-use crate::segment::params::{ForceModel, SegmentParams};
+use crate::segment::model::{ForceTerm, Initialiser, IterationState, LabelRule, TermKind};
+use crate::segment::params::{ForceModel, Init, SegmentParams};
 use crate::segment::raster::Raster;
+use crate::segment::thresholds::split_histogram;
+use std::sync::{Arc, Mutex, MutexGuard};
 
-/// Adds a per-vertex field of the [`ForceField`] into `out`.
+/// Largest stable coefficient of the explicit bending step: the
+/// highest-frequency mode changes by a factor `1 − 4k` per step.
+pub const MAX_BENDING_STEP: f64 = 0.2;
+/// Largest stable coefficient of the explicit stretching (umbrella) step.
+pub const MAX_STRETCHING_STEP: f64 = 0.5;
+
+/// The paper's per-vertex fields (region force, bending and umbrella
+/// directions) shared by the terms built together by [`PaperTerms::new`]:
+/// computed by the first of them that needs it in a force evaluation, then
+/// read by the others.
+#[derive(Clone, Debug)]
+pub struct PaperField<K: Raster> {
+    shared: Arc<Mutex<CachedField<K>>>,
+}
+
+#[derive(Debug)]
+struct CachedField<K: Raster> {
+    field: ForceField<K>,
+    settings: ForceSettings,
+    /// The force evaluation the field was computed for.
+    computed_for: Option<u64>,
+}
+
+impl<K: Raster> PaperField<K> {
+    /// A field computed with `settings` (`equal_means` is set from the
+    /// image's range at each computation).
+    pub fn new(settings: ForceSettings) -> Self {
+        PaperField {
+            shared: Arc::new(Mutex::new(CachedField {
+                field: ForceField::new(),
+                settings,
+                computed_for: None,
+            })),
+        }
+    }
+
+    /// The force evaluation the field was last computed for.
+    pub fn computed_for(&self) -> Option<u64> {
+        self.lock().computed_for
+    }
+
+    /// The field as last computed (for inspection).
+    pub fn field(&self) -> impl std::ops::Deref<Target = ForceField<K>> + '_ {
+        FieldGuard(self.lock())
+    }
+
+    fn lock(&self) -> MutexGuard<'_, CachedField<K>> {
+        // A panic while computing leaves scratch space only: still usable.
+        self.shared.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The field for the state's force evaluation, computed now unless
+    /// another term already did.
+    fn current(
+        &self,
+        complex: &Complex<K>,
+        state: &IterationState<'_, '_>,
+    ) -> MutexGuard<'_, CachedField<K>> {
+        let mut cached = self.lock();
+        if cached.computed_for != Some(state.evaluation) {
+            let mut settings = cached.settings;
+            settings.equal_means = 1e-6 * (state.range.1 - state.range.0);
+            cached
+                .field
+                .compute(complex, state.image, state.phases, &settings);
+            cached.computed_for = Some(state.evaluation);
+        }
+        cached
+    }
+}
+
+/// [`PaperField::field`]'s view into the locked cache.
+struct FieldGuard<'g, K: Raster>(MutexGuard<'g, CachedField<K>>);
+
+impl<K: Raster> std::ops::Deref for FieldGuard<'_, K> {
+    type Target = ForceField<K>;
+    fn deref(&self) -> &ForceField<K> {
+        &self.0.field
+    }
+}
+
+/// Adds a per-vertex field into `out`.
 fn add_field<P: Point>(out: &mut [P], field: &[P]) {
     for (o, f) in out.iter_mut().zip(field) {
         *o += *f;
     }
+}
+
+/// The paper's three force terms with the settings and weights of a
+/// [`SegmentParams`], sharing one field.
+pub struct PaperTerms<K: Raster> {
+    /// Eqs. (5)–(7).
+    pub region: RegionForce<K>,
+    /// Eq. (2), β.
+    pub rigidity: Rigidity<K>,
+    /// Eq. (2), α.
+    pub elasticity: Elasticity<K>,
+}
+
+impl<K: Raster> PaperTerms<K> {
+    /// The terms of `params` (force model, junction force, sample spacing,
+    /// rigidity and elasticity).
+    pub fn new(params: &SegmentParams) -> Self {
+        let field = PaperField::new(ForceSettings {
+            model: params.force,
+            junction: params.junction_force,
+            spacing: params.sample_spacing,
+            equal_means: 0.0,
+        });
+        PaperTerms {
+            region: RegionForce {
+                model: params.force,
+                field: field.clone(),
+            },
+            rigidity: Rigidity {
+                beta: params.rigidity,
+                field: field.clone(),
+            },
+            elasticity: Elasticity {
+                alpha: params.elasticity,
+                field,
+            },
+        }
+    }
+}
+
+/// The field settings of the default [`SegmentParams`], for a term built alone.
+fn default_field<K: Raster>() -> PaperField<K> {
+    let p = SegmentParams::new(2);
+    PaperField::new(ForceSettings {
+        model: p.force,
+        junction: p.junction_force,
+        spacing: p.sample_spacing,
+        equal_means: 0.0,
+    })
 }
 
 /// The region force of eqs. (5)–(7) (the model chosen by
@@ -30,92 +160,137 @@ fn add_field<P: Point>(out: &mut [P], field: &[P]) {
 /// at triple junctions the mean-bracketing weights of eq. (7).
 ///
 /// Reference magnitude 1 for eq. (6), `(m_0 − m_1)²` for Chan–Vese.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct RegionForce;
+#[derive(Clone, Debug)]
+pub struct RegionForce<K: Raster> {
+    model: ForceModel,
+    field: PaperField<K>,
+}
 
-impl<K: Raster> ForceTerm<K> for RegionForce {
+impl<K: Raster> RegionForce<K> {
+    /// The field this term reads (shared with the terms built with it).
+    pub fn field(&self) -> &PaperField<K> {
+        &self.field
+    }
+}
+
+impl<K: Raster> ForceTerm<K> for RegionForce<K> {
     fn name(&self) -> &str {
         "region"
     }
 
-    fn reference_magnitude(&self, ctx: &ForceContext<'_, '_, K>) -> f64 {
-        match ctx.params.force {
+    fn reference_magnitude(&self, state: &IterationState<'_, '_>) -> f64 {
+        match self.model {
             ForceModel::Normalised => 1.0,
             ForceModel::ChanVese => {
                 let (a, b) = (
-                    ctx.phases.mean[0].unwrap_or(0.0),
-                    ctx.phases.mean[1].unwrap_or(0.0),
+                    state.phases.mean[0].unwrap_or(0.0),
+                    state.phases.mean[1].unwrap_or(0.0),
                 );
                 ((a - b) * (a - b)).max(1e-12)
             }
         }
     }
 
-    fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
-        add_field(out, &ctx.field.external);
+    fn add_forces(
+        &mut self,
+        complex: &Complex<K>,
+        state: &IterationState<'_, '_>,
+        out: &mut [K::Point],
+    ) {
+        add_field(out, &self.field.current(complex, state).field.external);
     }
 }
 
 /// The rigidity term of eq. (2): the bending direction `−Δ²X` traced along
-/// each phase boundary, weighted by [`SegmentParams::rigidity`] (β).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Rigidity;
+/// each phase boundary, weighted by β ([`SegmentParams::rigidity`] in
+/// [`PaperTerms::new`]).
+#[derive(Clone, Debug)]
+pub struct Rigidity<K: Raster> {
+    /// The weight β.
+    pub beta: f64,
+    field: PaperField<K>,
+}
 
-impl<K: Raster> ForceTerm<K> for Rigidity {
+impl<K: Raster> Rigidity<K> {
+    /// A rigidity of weight `beta` on its own.
+    pub fn new(beta: f64) -> Self {
+        Rigidity {
+            beta,
+            field: default_field(),
+        }
+    }
+}
+
+impl<K: Raster> ForceTerm<K> for Rigidity<K> {
     fn name(&self) -> &str {
         "rigidity"
     }
 
-    fn kind(&self, params: &SegmentParams) -> TermKind {
+    fn kind(&self) -> TermKind {
         TermKind::Smoothing {
-            weight: params.rigidity,
+            weight: self.beta,
             max_step: MAX_BENDING_STEP,
         }
     }
 
-    fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
-        add_field(out, &ctx.field.bending);
+    fn add_forces(
+        &mut self,
+        complex: &Complex<K>,
+        state: &IterationState<'_, '_>,
+        out: &mut [K::Point],
+    ) {
+        add_field(out, &self.field.current(complex, state).field.bending);
     }
 
-    fn apply_to(
-        &mut self,
-        field: &mut ForceField<K>,
-        input: &[K::Point],
-        out: &mut Vec<K::Point>,
-    ) -> bool {
-        field.apply_bending(input, out);
+    fn apply_to(&mut self, input: &[K::Point], out: &mut Vec<K::Point>) -> bool {
+        self.field.lock().field.apply_bending(input, out);
         true
     }
 }
 
 /// The elasticity term of eq. (2): the umbrella `ΔX` along each phase
-/// boundary, weighted by [`SegmentParams::elasticity`] (α, 0 by default).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Elasticity;
+/// boundary, weighted by α ([`SegmentParams::elasticity`] in
+/// [`PaperTerms::new`], 0 by default).
+#[derive(Clone, Debug)]
+pub struct Elasticity<K: Raster> {
+    /// The weight α.
+    pub alpha: f64,
+    field: PaperField<K>,
+}
 
-impl<K: Raster> ForceTerm<K> for Elasticity {
+impl<K: Raster> Elasticity<K> {
+    /// An elasticity of weight `alpha` on its own.
+    pub fn new(alpha: f64) -> Self {
+        Elasticity {
+            alpha,
+            field: default_field(),
+        }
+    }
+}
+
+impl<K: Raster> ForceTerm<K> for Elasticity<K> {
     fn name(&self) -> &str {
         "elasticity"
     }
 
-    fn kind(&self, params: &SegmentParams) -> TermKind {
+    fn kind(&self) -> TermKind {
         TermKind::Smoothing {
-            weight: params.elasticity,
+            weight: self.alpha,
             max_step: MAX_STRETCHING_STEP,
         }
     }
 
-    fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
-        add_field(out, &ctx.field.stretching);
+    fn add_forces(
+        &mut self,
+        complex: &Complex<K>,
+        state: &IterationState<'_, '_>,
+        out: &mut [K::Point],
+    ) {
+        add_field(out, &self.field.current(complex, state).field.stretching);
     }
 
-    fn apply_to(
-        &mut self,
-        field: &mut ForceField<K>,
-        input: &[K::Point],
-        out: &mut Vec<K::Point>,
-    ) -> bool {
-        field.apply_umbrella(input, out);
+    fn apply_to(&mut self, input: &[K::Point], out: &mut Vec<K::Point>) -> bool {
+        self.field.lock().field.apply_umbrella(input, out);
         true
     }
 }
@@ -134,27 +309,31 @@ impl<K: Raster> LabelRule<K> for CellFlips {
         "cell flips"
     }
 
-    fn relabel(&mut self, ctx: &mut LabelContext<'_, '_, K>) -> usize {
+    fn relabel(&mut self, complex: &mut Complex<K>, state: &IterationState<'_, '_>) -> usize {
         self.flipper.flip(
-            ctx.complex,
-            ctx.image,
-            ctx.cells,
-            ctx.phases,
-            ctx.length_weight,
-            ctx.params.flip_guard,
-            ctx.params.flip_once,
+            complex,
+            state.image,
+            state.cells,
+            state.phases,
+            state.length_weight,
+            state.params.flip_guard,
+            state.params.flip_once,
         )
     }
 
-    fn would_relabel(&mut self, view: &LabelView<'_, '_, K>) -> Option<bool> {
+    fn would_relabel(
+        &mut self,
+        complex: &Complex<K>,
+        state: &IterationState<'_, '_>,
+    ) -> Option<bool> {
         Some(self.flipper.would_flip(
-            view.complex,
-            view.image,
-            view.cells,
-            view.phases,
-            view.length_weight,
-            view.params.flip_guard,
-            view.params.flip_once,
+            complex,
+            state.image,
+            state.cells,
+            state.phases,
+            state.length_weight,
+            state.params.flip_guard,
+            state.params.flip_once,
         ))
     }
 }
@@ -177,52 +356,107 @@ impl<K: Raster> LabelRule<K> for ComponentFlips {
         "component flips"
     }
 
-    fn relabel(&mut self, ctx: &mut LabelContext<'_, '_, K>) -> usize {
-        if !ctx.params.flip_guard {
+    fn relabel(&mut self, complex: &mut Complex<K>, state: &IterationState<'_, '_>) -> usize {
+        if !state.params.flip_guard {
             return 0;
         }
-        let nu = ctx.length_weight;
+        let nu = state.length_weight;
         let mut flips = self
             .flipper
-            .component_flips(ctx.complex, ctx.cells, ctx.phases, nu);
-        if ctx.params.sizing.adaptive {
-            flips += self.clusters.flip(ctx.complex, ctx.cells, ctx.phases, nu);
+            .component_flips(complex, state.cells, state.phases, nu);
+        if state.params.sizing.adaptive {
+            flips += self.clusters.flip(complex, state.cells, state.phases, nu);
         }
         flips
     }
 
-    fn would_relabel(&mut self, view: &LabelView<'_, '_, K>) -> Option<bool> {
-        let nu = view.length_weight;
+    fn would_relabel(
+        &mut self,
+        complex: &Complex<K>,
+        state: &IterationState<'_, '_>,
+    ) -> Option<bool> {
+        let nu = state.length_weight;
         Some(
-            view.params.flip_guard
+            state.params.flip_guard
                 && (self
                     .flipper
-                    .would_flip_components(view.complex, view.cells, view.phases, nu)
-                    || (view.params.sizing.adaptive
+                    .would_flip_components(complex, state.cells, state.phases, nu)
+                    || (state.params.sizing.adaptive
                         && self
                             .clusters
-                            .would_flip(view.complex, view.cells, view.phases, nu))),
+                            .would_flip(complex, state.cells, state.phases, nu))),
         )
     }
 }
 
-/// The initialisation chosen by [`SegmentParams::init`] (range, disks or a
-/// label image).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct ParamsInit;
+/// The initialisation chosen by [`SegmentParams::init`] (histogram, range,
+/// disks, balls or a label image) on the box mesh.
+#[derive(Clone, Debug, Default)]
+pub struct ParamsInit {
+    /// The thresholds drawn by the histogram and range initialisations.
+    thresholds: Vec<f64>,
+}
 
 impl<K: Raster> Initialiser<K> for ParamsInit {
     fn initialise(
         &mut self,
-        ctx: &mut InitContext<'_, '_, K>,
+        complex: &mut Complex<K>,
+        state: &IterationState<'_, '_>,
     ) -> Result<Vec<Option<f64>>, SegmentError> {
+        let params = state.params;
+        let classes = (params.init == Init::Histogram)
+            .then(|| split_histogram(&state.intensity.cell_histogram(state.cells), params.phases));
+        self.thresholds = match (&classes, &params.init) {
+            (Some(c), _) => c.thresholds.clone(),
+            (None, Init::Range) => {
+                let (lo, hi) = state.range;
+                let n = params.phases as f64;
+                (1..params.phases)
+                    .map(|k| lo + (hi - lo) * k as f64 / n)
+                    .collect()
+            }
+            _ => Vec::new(),
+        };
         initialise(
-            ctx.complex,
-            ctx.image,
-            ctx.params,
-            ctx.cells,
-            ctx.range,
-            ctx.classes,
+            complex,
+            state.image,
+            params,
+            state.cells,
+            state.range,
+            classes.as_ref(),
         )
+    }
+
+    fn thresholds(&self) -> Vec<f64> {
+        self.thresholds.clone()
+    }
+}
+
+/// A given mesh whose labels are the initialisation (e.g. a complex
+/// conforming to an initial surface). It must cover the image domain.
+pub struct GivenMesh<K: Raster> {
+    complex: Option<Complex<K>>,
+}
+
+impl<K: Raster> GivenMesh<K> {
+    /// Starts from `complex` as it is labelled.
+    pub fn new(complex: Complex<K>) -> Self {
+        GivenMesh {
+            complex: Some(complex),
+        }
+    }
+}
+
+impl<K: Raster> Initialiser<K> for GivenMesh<K> {
+    fn start_mesh(&mut self) -> Option<Complex<K>> {
+        self.complex.take()
+    }
+
+    fn initialise(
+        &mut self,
+        _complex: &mut Complex<K>,
+        state: &IterationState<'_, '_>,
+    ) -> Result<Vec<Option<f64>>, SegmentError> {
+        Ok(vec![None; state.params.phases])
     }
 }

@@ -6,9 +6,10 @@
 //! the radius `ρ`. Move, strengthen or switch it off mid-run through
 //! [`Segmentation::force_mut`](crate::segment::Segmentation::force_mut).
 
+use crate::complex::Complex;
 use crate::complex::VertexKind;
 use crate::dim::Point;
-use crate::segment::model::{ForceContext, ForceTerm};
+use crate::segment::model::{ForceTerm, IterationState};
 use crate::segment::raster::Raster;
 
 /// A repelling (`strength > 0`) or attracting (`strength < 0`) point.
@@ -50,12 +51,17 @@ impl<K: Raster> ForceTerm<K> for Volcano<K::Point> {
         "volcano"
     }
 
-    fn add_forces(&mut self, ctx: &ForceContext<'_, '_, K>, out: &mut [K::Point]) {
-        for v in ctx.complex.vertex_ids() {
-            if ctx.complex.class(v).kind == VertexKind::Interior {
+    fn add_forces(
+        &mut self,
+        complex: &Complex<K>,
+        _state: &IterationState<'_, '_>,
+        out: &mut [K::Point],
+    ) {
+        for v in complex.vertex_ids() {
+            if complex.class(v).kind == VertexKind::Interior {
                 continue;
             }
-            out[v.index()] += self.force_at(ctx.complex.position(v));
+            out[v.index()] += self.force_at(complex.position(v));
         }
     }
 }
