@@ -4,10 +4,11 @@
 //! peers' phantoms.
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
+use dsc_seg::bench::CellCache;
 use dsc_seg::complex::Complex;
 use dsc_seg::dim::D2;
 use dsc_seg::phantom::shapes2d;
-use dsc_seg::segment::integrate::{integrate_cells, CellCache};
+use dsc_seg::segment::integrate::integrate_cells;
 use dsc_seg::segment::{default_edge_length, ImageView, SegmentParams, Segmentation};
 use spin_join::SpinHelper;
 use std::hint::black_box;

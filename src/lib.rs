@@ -137,6 +137,8 @@
 #![deny(rustdoc::broken_intra_doc_links)]
 
 pub mod batch;
+#[doc(hidden)]
+pub mod bench;
 pub mod complex;
 pub mod dim;
 pub mod dsc;

@@ -50,6 +50,7 @@ pub enum BuildError {
     Triangulation(String),
 }
 
+/// Layer `complex`: construction from arrays and labelling.
 impl<K: Dim> Complex<K> {
     /// Builds a complex from vertex positions, cells and labels inside the box
     /// `[min, max]`. Negatively oriented cells are reoriented; degenerate cells,
@@ -209,6 +210,7 @@ fn spade_error(e: impl std::fmt::Display) -> BuildError {
     BuildError::Triangulation(e.to_string())
 }
 
+/// Layer `complex`: construction of the 2D box meshes.
 impl Complex<D2> {
     /// A near-equilateral triangulation of `[0,w]×[0,h]` with average edge
     /// length close to `l`: staggered rows of points plus exact points on the
@@ -317,6 +319,7 @@ fn dist_to_polyline(p: Vector2<f64>, poly: &[Vector2<f64>]) -> f64 {
 /// different number of tets: measured, see the test below).
 const KUHN_MEAN_EDGE_PER_SPACING: f64 = 1.24;
 
+/// Layer `complex`: construction of the 3D box meshes.
 impl Complex<D3> {
     /// A Kuhn (Freudenthal) tetrahedralisation of the box `[0,size]` at average
     /// edge length close to `l`: each grid cube split into six tets around its

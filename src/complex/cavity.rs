@@ -88,6 +88,7 @@ fn glue_coinciding(outside: &mut Outside) -> Result<Glued, Rejection> {
     Ok(glued)
 }
 
+/// Layer `complex`: the cavity primitive behind every mesh operation.
 impl<K: Dim> Complex<K> {
     /// Adds an unattached vertex (it becomes live when a new cell uses it).
     pub(crate) fn add_vertex(&mut self, p: K::Point) -> VertexId {

@@ -47,6 +47,7 @@ impl VertexClass {
     }
 }
 
+/// Layer `complex`: vertex classes (interior, interface, junction; box faces).
 impl<K: Dim> Complex<K> {
     /// Which box faces `p` lies on (exact comparison: boundary vertices are kept exactly on the box).
     pub(crate) fn boundary_mask(&self, p: &K::Point) -> u8 {
@@ -88,7 +89,7 @@ impl<K: Dim> Complex<K> {
 
     /// [`count_phase_pieces`](Self::count_phase_pieces); `star` is scratch.
     fn phase_pieces_with(&self, v: VertexId, star: &mut Vec<CellId>) -> usize {
-        if K::N == 2 {
+        if K::STAR_IS_FAN {
             if let Some(pieces) = self.fan_phase_pieces(v) {
                 return pieces;
             }
@@ -206,10 +207,10 @@ impl<K: Dim> Complex<K> {
     fn reclassify_vertices(&mut self, vertices: &mut [VertexId]) {
         vertices.sort_unstable();
         // (the 2D pieces are counted by a walk around the fan, without a star)
-        let mut star = if K::N == 3 {
-            self.take_list()
-        } else {
+        let mut star = if K::STAR_IS_FAN {
             Vec::new()
+        } else {
+            self.take_list()
         };
         let mut last = None;
         for &v in vertices.iter() {
@@ -218,7 +219,7 @@ impl<K: Dim> Complex<K> {
                 last = Some(v);
             }
         }
-        if K::N == 3 {
+        if !K::STAR_IS_FAN {
             self.give_back(star);
         }
     }

@@ -14,6 +14,7 @@ pub struct MeshArrays {
     pub labels: Vec<Label>,
 }
 
+/// Layer `complex`: export as plain arrays.
 impl<K: Dim> Complex<K> {
     /// Copies the live part of the complex into dense arrays (ids renumbered in order).
     pub fn to_arrays(&self) -> MeshArrays {

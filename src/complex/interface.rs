@@ -27,6 +27,7 @@ pub struct InterfaceFacet<P> {
     pub measure: f64,
 }
 
+/// Layer `complex`: the interface, facet by facet.
 impl<K: Dim> Complex<K> {
     /// Every interface facet once, in increasing cell id and then local index.
     pub fn interface_facets(&self) -> impl Iterator<Item = InterfaceFacet<K::Point>> + '_ {

@@ -12,6 +12,7 @@ use super::{CellId, Complex, VertexId};
 use crate::dim::{Dim, D3};
 use smallvec::SmallVec;
 
+/// Layer `complex`: junction edges (3D interfaces meeting along an edge).
 impl<K: Dim> Complex<K> {
     /// Whether some edge at `v` lies in more than two interface facets (only
     /// possible in 3D: a junction curve or a non-manifold contact).
@@ -21,7 +22,7 @@ impl<K: Dim> Complex<K> {
 
     /// [`has_junction_edge`](Self::has_junction_edge); `star` is scratch.
     pub(crate) fn has_junction_edge_with(&self, v: VertexId, star: &mut Vec<CellId>) -> bool {
-        if K::N < 3 {
+        if !K::EDGE_JUNCTIONS {
             return false;
         }
         self.star_into(v, star);
@@ -49,6 +50,7 @@ impl<K: Dim> Complex<K> {
     }
 }
 
+/// Layer `complex`: junction curves of a 3D complex.
 impl Complex<D3> {
     /// Number of interface facets (triangles) containing the edge `uv`.
     pub fn interface_faces_at_edge(&self, u: VertexId, v: VertexId) -> usize {

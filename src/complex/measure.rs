@@ -3,6 +3,7 @@
 use super::{CellId, Complex, Label, VertexId};
 use crate::dim::{Dim, Point};
 
+/// Layer `complex`: measures (phase areas or volumes, qualities, edge lengths).
 impl<K: Dim> Complex<K> {
     /// Total area (2D) or volume (3D) of each phase, indexed by label.
     pub fn phase_measures(&self) -> Vec<f64> {

@@ -27,6 +27,13 @@ use crate::dim::{Dim, Point, D2, D3};
 use bookkeeping::Bookkeeping;
 
 /// A labelled simplicial complex filling an axis-aligned box (the image domain).
+///
+/// Its operations are documented in blocks named by the layer that adds
+/// them: `complex` (storage, connectivity, construction, classes,
+/// measures, the interface, validation), `ops` (local mesh operations:
+/// moves, flips, collapses, splits, smoothing), `dsc` (the deformation and
+/// the improvement and resizing around it), `segment` (voxel ownership) and
+/// the VTK output.
 #[derive(Clone, Debug)]
 pub struct Complex<K: Dim> {
     positions: Vec<K::Point>,
@@ -52,6 +59,8 @@ pub type Complex2 = Complex<D2>;
 /// A tetrahedral complex.
 pub type Complex3 = Complex<D3>;
 
+/// Layer `complex`: storage and connectivity: positions, cells, labels,
+/// neighbours, stars, counts and ids.
 impl<K: Dim> Complex<K> {
     /// Position of a vertex.
     #[inline]
@@ -155,7 +164,7 @@ impl<K: Dim> Complex<K> {
     /// Collects the cells incident to `v` into `out` (cleared first), by walking
     /// across facets that contain `v`: breadth-first from its stored cell.
     pub fn star_into(&self, v: VertexId, out: &mut Vec<CellId>) {
-        if K::N == 2 {
+        if K::STAR_IS_FAN {
             self.fan_into(v, out);
         } else {
             self.star_by_search(v, out);

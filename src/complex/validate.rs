@@ -67,6 +67,7 @@ pub enum Finding {
     CountMismatch,
 }
 
+/// Layer `complex`: validation of every invariant.
 impl<K: Dim> Complex<K> {
     /// Checks every invariant in time linear in the size of the complex and
     /// returns what is broken (empty when the complex is valid).

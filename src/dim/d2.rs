@@ -25,6 +25,10 @@ impl D2 {
 
 impl Dim for D2 {
     const N: usize = 2;
+    const STAR_IS_FAN: bool = true;
+    const EDGE_JUNCTIONS: bool = false;
+    const SAMPLES: &'static str = "pixels";
+    const SMALLEST_GRID: &'static str = "2×2";
     type Point = Vector2<f64>;
     type Cell = [VertexId; 3];
     type Neighbours = [Option<CellId>; 3];

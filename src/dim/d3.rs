@@ -16,6 +16,10 @@ fn coord(p: &Vector3<f64>) -> robust::Coord3D<f64> {
 
 impl Dim for D3 {
     const N: usize = 3;
+    const STAR_IS_FAN: bool = false;
+    const EDGE_JUNCTIONS: bool = true;
+    const SAMPLES: &'static str = "voxels";
+    const SMALLEST_GRID: &'static str = "2×2×2";
     type Point = Vector3<f64>;
     type Cell = [VertexId; 4];
     type Neighbours = [Option<CellId>; 4];

@@ -29,6 +29,16 @@ pub trait Dim: sealed::Sealed + Copy + Clone + Debug + Default + Send + Sync + '
     const N: usize;
     /// Vertices per cell (`N + 1`).
     const NV: usize = Self::N + 1;
+    /// Whether the cells around a vertex form a fan (2D), walked around the
+    /// vertex; otherwise (3D) they are found by a search across facets.
+    const STAR_IS_FAN: bool;
+    /// Whether interfaces can meet along an edge (3D junction curves); in
+    /// 2D they meet at vertices only.
+    const EDGE_JUNCTIONS: bool;
+    /// What the grid's samples are called ("pixels", "voxels").
+    const SAMPLES: &'static str;
+    /// The smallest grid a mesh can cover ("2×2", "2×2×2").
+    const SMALLEST_GRID: &'static str;
     /// A point or vector of the space.
     type Point: Point;
     /// The `N + 1` vertices of a cell, positively oriented.

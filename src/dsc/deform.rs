@@ -64,6 +64,7 @@ pub struct DeformReport {
     pub resize: ResizeStats,
 }
 
+/// Layer `dsc`: the deformation (move, improve, resize, compact).
 impl<K: Connectivity> Complex<K> {
     /// The DSC deformation: each vertex
     /// with a destination moves as far as it can without inverting a cell, one
@@ -141,6 +142,7 @@ impl<K: Connectivity> Complex<K> {
     }
 }
 
+/// Layer `dsc`: snapping vertices to the domain border.
 impl<K: Connectivity> Complex<K> {
     /// A vertex heading for a box face is blocked by the thin cells between it
     /// and the face: it may only go half-way to them, so it would approach the

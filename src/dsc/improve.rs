@@ -197,6 +197,7 @@ pub struct ImproveStats {
     pub degenerate_splits: usize,
 }
 
+/// Layer `dsc`: mesh improvement (smoothing, flips, degenerate cells).
 impl<K: Connectivity> Complex<K> {
     /// Smooths, flips, removes degenerate cells and smooths again, everywhere.
     pub fn improve(&mut self, params: &DscParams) -> ImproveStats {

@@ -28,6 +28,7 @@ pub struct ResizeStats {
 /// may run (each halves a cell about; the uniform field runs one).
 const REFINE_PASSES: usize = 3;
 
+/// Layer `dsc`: resizing (split long, collapse short edges and cells).
 impl<K: Connectivity> Complex<K> {
     /// Splits long and collapses short interface edges, splits large and
     /// collapses small cells, against the average edge length `L` of

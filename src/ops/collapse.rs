@@ -34,6 +34,7 @@ struct Candidate<P> {
     at: P,
 }
 
+/// Layer `ops`: edge collapses.
 impl<K: Dim> Complex<K> {
     /// Collapses the edge `uv`, choosing which end survives and where (either end
     /// or the midpoint) to maximise the worst quality of the new cells, which must

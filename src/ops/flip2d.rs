@@ -15,6 +15,7 @@ fn coord(p: nalgebra::Vector2<f64>) -> robust::Coord<f64> {
     robust::Coord { x: p.x, y: p.y }
 }
 
+/// Layer `ops`: 2D edge flips.
 impl Complex<D2> {
     /// Flips the edge opposite local vertex `i` of cell `c` if it is off the
     /// interface and not locally Delaunay (exact incircle test).

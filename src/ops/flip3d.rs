@@ -41,6 +41,7 @@ fn tet_quality(p: [Vector3<f64>; 4]) -> f64 {
     D3::quality(&p)
 }
 
+/// Layer `ops`: 3D flips (2-3, 3-2, edge removal).
 impl Complex<D3> {
     /// The 2-3 flip of the facet opposite local vertex `i` of `c`: replaces `c`
     /// and its neighbour across that facet (which must carry the same label) by

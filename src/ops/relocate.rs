@@ -14,6 +14,7 @@ pub enum MoveOutcome {
     Blocked,
 }
 
+/// Layer `ops`: the DSC's vertex move (as far as possible without inversion).
 impl<K: Dim> Complex<K> {
     /// Restricts a destination to what `v` may reach: coordinates pinned by the
     /// domain faces the vertex lies on are kept, the rest is clamped into the box.

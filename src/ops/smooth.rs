@@ -26,6 +26,7 @@ impl<K: Dim> Default for SmoothScratch<K> {
     }
 }
 
+/// Layer `ops`: vertex smoothing.
 impl<K: Dim> Complex<K> {
     /// Moves a non-interface vertex towards the mean of its neighbours (sliding
     /// along the domain boundary if it lies on it), unless its star is already

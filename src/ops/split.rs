@@ -12,6 +12,7 @@ use crate::complex::{CellId, Complex, Label, Rejection, VertexId};
 use crate::dim::Dim;
 use smallvec::SmallVec;
 
+/// Layer `ops`: edge splits.
 impl<K: Dim> Complex<K> {
     /// Splits edge `uv` at its midpoint, returning the new vertex. Per-phase
     /// measures are unchanged (each cell is cut exactly in two).

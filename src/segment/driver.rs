@@ -262,14 +262,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let dims = &image.dims[..K::N];
         if dims.iter().any(|&d| d < 2) {
             let size: Vec<String> = dims.iter().map(|d| d.to_string()).collect();
-            let (unit, min) = if K::N == 2 {
-                ("pixels", "2×2")
-            } else {
-                ("voxels", "2×2×2")
-            };
             return Err(SegmentError::ImageTooSmall(
-                format!("{} {unit}", size.join("×")),
-                min,
+                format!("{} {}", size.join("×"), K::SAMPLES),
+                K::SMALLEST_GRID,
             ));
         }
         params.validate_dims(image.dims)?;

@@ -65,7 +65,7 @@ type CachedCorners<K> = Option<[<K as Dim>::Point; 4]>;
 /// interface never move, so after the first iterations only the band the
 /// interface sweeps is integrated.
 #[derive(Clone, Debug)]
-pub struct CellCache<K: Dim> {
+pub(crate) struct CellCache<K: Dim> {
     /// Corners at the last integration, per cell id.
     corners: Vec<CachedCorners<K>>,
     /// The previous call's corners and statistics, read while the current

@@ -104,6 +104,7 @@ impl<const M: usize> Collector<M> {
     }
 }
 
+/// Output: the mesh as a VTK file.
 impl<K: Dim> Complex<K> {
     /// Writes the mesh as `.vtu` in `frame` with the cell data `phase`
     /// (`order[label]`; labels beyond `order` are written as they are).
@@ -132,6 +133,7 @@ impl<K: Dim> Complex<K> {
     }
 }
 
+/// Output: the 2D interface as VTK line segments.
 impl Complex<D2> {
     /// The interface segments: every edge between two phases, once.
     pub fn interface_lines(&self) -> InterfaceLines {
@@ -160,6 +162,7 @@ impl Complex<D2> {
     }
 }
 
+/// Output: the 3D interface as a VTK triangle surface.
 impl Complex<D3> {
     /// The interface surface: every facet between two phases, once.
     pub fn interface_surface(&self) -> InterfaceSurface {

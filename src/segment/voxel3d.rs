@@ -247,6 +247,7 @@ pub fn triangle_quadrature(
     }
 }
 
+/// Layer `segment`: which voxels a tetrahedron owns.
 impl Complex<D3> {
     /// For every voxel of a `dims` grid the tet that owns its centre, in
     /// x-fastest order (`None` only for voxels outside the complex's domain).
