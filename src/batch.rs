@@ -41,6 +41,10 @@ pub enum Task {
         params: SegmentParams,
         /// The label PNG for `Init::Labels`.
         init_labels: Option<PathBuf>,
+        /// The channel of colour images to segment (else their luminance).
+        channel: Option<usize>,
+        /// The pixel size to use instead of each file's.
+        spacing: Option<[f64; 2]>,
     },
     /// 3D volumes.
     Volume {
@@ -50,6 +54,8 @@ pub enum Task {
         init_labels: Option<PathBuf>,
         /// The initial surface (see [`crate::pipeline::Segment3dJob::init_surface`]).
         init_surface: Option<PathBuf>,
+        /// The voxel size to use instead of each file's.
+        spacing: Option<[f64; 3]>,
     },
 }
 
@@ -283,6 +289,8 @@ struct Fingerprint {
     params: serde_json::Value,
     init_labels: Option<PathBuf>,
     init_surface: Option<PathBuf>,
+    /// How the input is read (`--channel`, `--spacing`).
+    input_options: serde_json::Value,
     outputs: Vec<String>,
     input: PathBuf,
     input_bytes: u64,
@@ -386,6 +394,8 @@ impl Batch {
             Task::Image {
                 params,
                 init_labels,
+                channel,
+                spacing,
             } => SegmentJob {
                 source,
                 out: dir.clone(),
@@ -393,12 +403,15 @@ impl Batch {
                 init_labels: init_labels.clone(),
                 outputs: self.outputs,
                 quiet: true,
+                channel: *channel,
+                spacing: *spacing,
             }
             .run()?,
             Task::Volume {
                 params,
                 init_labels,
                 init_surface,
+                spacing,
             } => Segment3dJob {
                 source,
                 out: dir.clone(),
@@ -407,7 +420,7 @@ impl Batch {
                 init_surface: init_surface.clone(),
                 outputs: self.outputs,
                 quiet: true,
-                spacing: None,
+                spacing: *spacing,
             }
             .run()?,
         };
@@ -444,13 +457,27 @@ impl Batch {
             .ok()
             .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
             .map(|d| d.as_nanos());
-        let (init_labels, init_surface) = match &self.task {
-            Task::Image { init_labels, .. } => (init_labels.clone(), None),
+        let (init_labels, init_surface, input_options) = match &self.task {
+            Task::Image {
+                init_labels,
+                channel,
+                spacing,
+                ..
+            } => (
+                init_labels.clone(),
+                None,
+                serde_json::json!({ "channel": channel, "spacing": spacing }),
+            ),
             Task::Volume {
                 init_labels,
                 init_surface,
+                spacing,
                 ..
-            } => (init_labels.clone(), init_surface.clone()),
+            } => (
+                init_labels.clone(),
+                init_surface.clone(),
+                serde_json::json!({ "spacing": spacing }),
+            ),
         };
         Ok(Fingerprint {
             version: env!("CARGO_PKG_VERSION").to_string(),
@@ -458,9 +485,10 @@ impl Batch {
             params: serde_json::to_value(self.params()).map_err(|e| Error::Usage(e.to_string()))?,
             init_labels,
             init_surface,
+            input_options,
             outputs: self
                 .outputs
-                .files(self.task.is_3d())
+                .files_for(self.task.is_3d(), input)
                 .iter()
                 .map(|s| s.to_string())
                 .collect(),

@@ -153,12 +153,26 @@ pub struct SegmentOptions {
     /// Label PNG for --init labels (same size as the image, values 0..N-1).
     #[arg(long)]
     pub init_labels: Option<PathBuf>,
+    /// Segment channel K of a colour image (0 = red, 1 = green, 2 = blue,
+    /// 3 = alpha; for a gray image with alpha 0 = gray, 1 = alpha) instead of
+    /// its luminance.
+    #[arg(long, value_name = "K")]
+    pub channel: Option<usize>,
+    /// Pixel size X,Y to use instead of the file's (TIFF resolution tags,
+    /// PNG pHYs; 1 otherwise), in the file's length unit.
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    pub spacing: Option<String>,
     /// The evolution's options.
     #[command(flatten)]
     pub evolution: EvolutionArgs,
 }
 
 impl SegmentOptions {
+    /// `--spacing X,Y`: two positive numbers.
+    pub fn spacing(&self) -> Result<Option<[f64; 2]>> {
+        parse_spacing(self.spacing.as_deref(), "X,Y")
+    }
+
     /// The segmentation parameters these options give, `default_phases`
     /// when `--phases` is absent. `--init labels` yields empty labels, which
     /// the pipeline loads from `--init-labels` once it knows the image size.
@@ -240,23 +254,7 @@ pub struct Segment3dOptions {
 impl Segment3dOptions {
     /// `--spacing X,Y,Z`: three positive numbers.
     pub fn spacing(&self) -> Result<Option<[f64; 3]>> {
-        let Some(s) = &self.spacing else {
-            return Ok(None);
-        };
-        let bad = || {
-            Error::Usage(format!(
-                "--spacing {s:?}: expected three positive numbers X,Y,Z"
-            ))
-        };
-        let v: Vec<f64> = s
-            .split(',')
-            .map(|t| t.trim().parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| bad())?;
-        match v[..] {
-            [x, y, z] if v.iter().all(|d| d.is_finite() && *d > 0.0) => Ok(Some([x, y, z])),
-            _ => Err(bad()),
-        }
+        parse_spacing(self.spacing.as_deref(), "X,Y,Z")
     }
 
     /// The segmentation parameters these options give (see
@@ -288,6 +286,28 @@ impl Segment3dOptions {
         };
         Ok(params)
     }
+}
+
+/// A `--spacing` value: `N` positive finite numbers separated by commas
+/// (`form` names them in the error).
+fn parse_spacing<const N: usize>(given: Option<&str>, form: &str) -> Result<Option<[f64; N]>> {
+    let Some(s) = given else {
+        return Ok(None);
+    };
+    let bad = || {
+        Error::Usage(format!(
+            "--spacing {s:?}: expected {N} positive numbers {form}"
+        ))
+    };
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| bad())?;
+    if !v.iter().all(|d| d.is_finite() && *d > 0.0) {
+        return Err(bad());
+    }
+    v.try_into().map(Some).map_err(|_| bad())
 }
 
 /// A `--phases` value: a count, or `auto`.

@@ -9,12 +9,12 @@
 
 use crate::complex::{Complex2, Complex3};
 use crate::error::{Error, Result};
-use crate::io::resolution::Resolution;
+use crate::io::resolution::{is_tiff, Resolution};
 use crate::io::{
     save_gray8_png, save_labels_nifti, save_labels_tiff, write_bytes_atomic, write_pvd, write_vti,
     write_vtm,
 };
-use crate::io::{Frame, Image2, Overlay};
+use crate::io::{Frame, FrameSource, Image2, Overlay};
 use crate::segment::measurements::Measurements;
 use crate::segment::SegmentReport;
 use crate::staging::Staging;
@@ -45,6 +45,9 @@ pub struct Segmented {
     /// Per-phase and per-interface figures in physical units.
     pub measurements: Measurements,
     pub(crate) render: Render,
+    /// A 2D TIFF input: the labels are also written as `labels.tif`, with
+    /// the input's pixel size.
+    pub(crate) tiff_labels: bool,
 }
 
 /// What the writers need beyond the arrays.
@@ -182,6 +185,23 @@ impl Outputs {
         }
         f
     }
+
+    /// [`files`](Self::files) as a run on `input` writes them: a NIfTI
+    /// volume's labels are `labels.nii.gz` instead of `labels.tif`, and a 2D
+    /// TIFF's labels come as `labels.tif` too.
+    pub fn files_for(&self, three_d: bool, input: &Path) -> Vec<&'static str> {
+        let mut f = self.files(three_d);
+        if three_d && crate::io::volume::is_nifti(input) {
+            for name in &mut f {
+                if *name == "labels.tif" {
+                    *name = NIFTI_LABELS;
+                }
+            }
+        } else if !three_d && self.labels && is_tiff(input) {
+            f.insert(1, "labels.tif");
+        }
+        f
+    }
 }
 
 impl Segmented {
@@ -276,6 +296,9 @@ impl Segmented {
                 }
             }
         }
+        if self.tiff_labels && outputs.labels {
+            files.insert(1, "labels.tif");
+        }
         stage.publish(dir, &files)
     }
 
@@ -288,6 +311,18 @@ impl Segmented {
         let (w, h) = (self.dims[0], self.dims[1]);
         if outputs.labels {
             save_gray8_png(path("labels.png"), w, h, &self.labels)?;
+            if self.tiff_labels {
+                let resolution = (self.frame.source != FrameSource::Default).then(|| Resolution {
+                    spacing: self.frame.spacing,
+                    unit: self.frame.unit.clone(),
+                });
+                save_labels_tiff(
+                    path("labels.tif"),
+                    [w, h, 1],
+                    &self.labels,
+                    resolution.as_ref(),
+                )?;
+            }
         }
         if outputs.overlay {
             let points: Vec<[f64; 2]> = self

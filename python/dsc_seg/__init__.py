@@ -70,7 +70,8 @@ class Segmentation:
     vertices : numpy.ndarray
         The final mesh's vertex positions (float64, ``n × 2`` or ``n × 3``;
         x, y[, z] in pixels/voxels, x along the last array axis; a volume's
-        scaled by ``spacing`` when given).
+        scaled by ``spacing`` when given; a 2D mesh stays in pixels, its
+        ``report`` measurements use ``spacing``).
     cells : numpy.ndarray
         Its triangles (2D) or tetrahedra (3D) as vertex indices (uint32).
     cell_phases : numpy.ndarray
@@ -133,8 +134,8 @@ def segment(image: Any, phases: Union[int, str] = 2, **options: Any) -> Segmenta
     Every option of ``dsc-seg segment`` (2D) or ``dsc-seg segment3d`` (3D)
     is a keyword, ``-`` written ``_``: for example ``edge_length=4``,
     ``max_iterations=200``, ``no_label_flips=True``, ``init="disks",
-    disk=[(64, 64, 20)]``, ``rigidity=0.5``; for a volume ``spacing=(x, y, z)``,
-    the voxel size (x along the array's last axis). Run ``dsc-seg segment
+    disk=[(64, 64, 20)]``, ``rigidity=0.5``; ``spacing=(x, y)`` for an image or
+    ``spacing=(x, y, z)`` for a volume, the pixel/voxel size (x along the array's last axis). Run ``dsc-seg segment
     --help`` / ``dsc-seg segment3d --help`` for the list.
 
     The GIL is released while the segmentation runs, so threads (or a Dask

@@ -46,7 +46,13 @@ fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyRes
     let inner = match ndim {
         2 => {
             let o = Options2::try_parse_from(argv).map_err(|e| parse_error(&e))?;
-            let image = convert::image(image)?;
+            if o.options.channel.is_some() {
+                return Err(pyo3::exceptions::PyValueError::new_err(
+                    "channel chooses a channel of an image file; index the array instead",
+                ));
+            }
+            let spacing = o.options.spacing().map_err(to_py)?;
+            let image = convert::image(image)?.with_spacing(spacing);
             let params = o.options.params(2).map_err(to_py)?;
             let params = with_init_labels(params, o.options.init_labels.as_deref(), image.dims())
                 .map_err(to_py)?;

@@ -87,10 +87,34 @@ def test_spacing_scales_a_volume():
     spaced = dsc_seg.segment(volume, max_iterations=3, spacing=(1, 1, 2))
     assert plain.vertices.max(axis=0).tolist() == [16, 16, 16]
     assert spaced.vertices.max(axis=0).tolist() == [16, 16, 32]
-    with pytest.raises(ValueError, match="three positive numbers"):
+    with pytest.raises(ValueError, match="3 positive numbers"):
         dsc_seg.segment(volume, spacing=(1, 0, 1))
-    with pytest.raises(ValueError, match="unexpected keyword argument 'spacing'"):
-        dsc_seg.segment(volume[0], spacing=(1, 1))
+
+
+def test_phases_auto_chooses_the_count_of_the_four_phase_phantom():
+    image, truth = dsc_seg.phantom("four_phase", size=128)
+    r = dsc_seg.segment(image, phases="auto", max_phases=6)
+    assert r.report["params"]["phases"] == 4
+    assert sorted(np.unique(r.labels)) == [0, 1, 2, 3]
+    trials = r.report["phase_choice"]["trials"]
+    assert [t["phases"] for t in trials][:3] == [2, 3, 4]
+    assert (r.labels == truth).mean() > 0.95
+
+
+def test_spacing_gives_an_image_its_pixel_size():
+    image, _ = dsc_seg.phantom("two_phase", size=64)
+    plain = dsc_seg.segment(image, max_iterations=5)
+    spaced = dsc_seg.segment(image, max_iterations=5, spacing=(0.5, 0.25))
+    assert np.array_equal(plain.labels, spaced.labels)
+    assert spaced.report["frame"]["spacing"][:2] == [0.5, 0.25]
+    for a, b in zip(plain.report["phases"]["phases"], spaced.report["phases"]["phases"]):
+        assert b["count"] == a["count"]
+        assert b["measure"] == pytest.approx(a["measure"] * 0.125)
+        assert b["mesh_measure"] == pytest.approx(a["mesh_measure"] * 0.125)
+    with pytest.raises(ValueError, match="2 positive numbers"):
+        dsc_seg.segment(image, spacing=(1, 1, 1))
+    with pytest.raises(ValueError, match="channel"):
+        dsc_seg.segment(image, channel=1)
 
 
 def test_bad_arguments_raise_value_error_with_the_cli_message(tmp_path):

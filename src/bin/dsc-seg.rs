@@ -175,6 +175,8 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
         let task = Task::Image {
             params: a.options.params(2)?,
             init_labels: a.options.init_labels.clone(),
+            channel: a.options.channel,
+            spacing: a.options.spacing()?,
         };
         return run_batch(&a.images, task, a.out, outputs, &a.batch, a.quiet);
     }
@@ -194,6 +196,7 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
             )
         }
     };
+    let spacing = a.options.spacing()?;
     let job = SegmentJob {
         source,
         out: a.out,
@@ -201,6 +204,8 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
         init_labels: a.options.init_labels,
         outputs,
         quiet: a.quiet,
+        channel: a.options.channel,
+        spacing,
     };
     let report = run_segment(&job)?;
     print_warnings(&report);
@@ -213,15 +218,11 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
 fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
     let outputs = Outputs::parse(&a.batch.outputs, true)?;
     if is_batch(&a.volumes, true) {
-        if a.options.spacing.is_some() {
-            return Err(Error::Usage(
-                "--spacing applies to a single volume, not to a batch".into(),
-            ));
-        }
         let task = Task::Volume {
             params: a.options.params()?,
             init_labels: a.options.init_labels.clone(),
             init_surface: a.options.init_surface.clone(),
+            spacing: a.options.spacing()?,
         };
         return run_batch(&a.volumes, task, a.out, outputs, &a.batch, a.quiet);
     }

@@ -32,6 +32,16 @@ pub enum IoError {
         /// The unsupported feature.
         reason: String,
     },
+    /// A channel was asked for that the image does not have.
+    #[error("{path} has no channel {channel}: it has {channels} (0 to {last})", last = channels - 1)]
+    NoChannel {
+        /// The offending path.
+        path: PathBuf,
+        /// The channel asked for.
+        channel: usize,
+        /// How many the image has.
+        channels: usize,
+    },
     /// The image or volume has a zero width, height or depth.
     #[error("{path}: empty image ({dims})")]
     Empty {

@@ -19,7 +19,8 @@
 //! and [`SampleType::to_original`] maps a value back to the file's units.
 //! Colour images are reduced to luminance with the Rec. 709 weights
 //! `0.2126 R + 0.7152 G + 0.0722 B`, applied to the stored (gamma-encoded)
-//! values; alpha is ignored.
+//! values; alpha is ignored. [`Image2::load_channel`] takes one channel
+//! instead; [`Image2::colour`] says which was done.
 
 use std::io::{self, Write};
 use std::path::Path;
@@ -59,6 +60,19 @@ impl SampleType {
     }
 }
 
+/// How a loaded image's gray values came from the file's samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Colour {
+    /// Grayscale samples (or an array), taken as they are.
+    Gray,
+    /// Colour samples reduced to their Rec. 709 luminance.
+    Luminance,
+    /// One channel of the samples (0 = red or gray, 1 = green or alpha of a
+    /// gray image, 2 = blue, 3 = alpha).
+    Channel(usize),
+}
+
 /// A row-major grayscale image (8/16-bit data scaled to `[0,1]`, other
 /// types as stored); see the module documentation for the coordinate convention.
 #[derive(Clone, Debug, PartialEq)]
@@ -67,6 +81,8 @@ pub struct Image2 {
     height: usize,
     data: Vec<f32>,
     sample_type: SampleType,
+    colour: Colour,
+    spacing: Option<[f64; 2]>,
 }
 
 impl Image2 {
@@ -87,6 +103,8 @@ impl Image2 {
             height,
             data,
             sample_type: SampleType::Float,
+            colour: Colour::Gray,
+            spacing: None,
         }
     }
 
@@ -104,6 +122,8 @@ impl Image2 {
             height,
             data,
             sample_type: SampleType::Float,
+            colour: Colour::Gray,
+            spacing: None,
         }
     }
 
@@ -186,6 +206,75 @@ impl Image2 {
             height,
             data,
             sample_type,
+            colour: Colour::Gray,
+            spacing: None,
+        })
+    }
+
+    /// Loads channel `channel` of an image file (0..channels: gray or R, G,
+    /// B, then alpha), 8/16-bit samples scaled as [`load`](Self::load)
+    /// scales them; `None` loads as [`load`](Self::load) does. A channel the
+    /// file does not have is an error that says how many it has.
+    pub fn load_channel(path: impl AsRef<Path>, channel: Option<usize>) -> Result<Self> {
+        let path = path.as_ref();
+        let Some(k) = channel else {
+            return Self::load(path);
+        };
+        let reader = ImageReader::open(path)
+            .map_err(|e| IoError::unreadable(path, e))?
+            .with_guessed_format()
+            .map_err(|e| IoError::unreadable(path, e))?;
+        let is_tiff = reader.format() == Some(ImageFormat::Tiff);
+        let img = match reader.decode() {
+            Ok(img) => img,
+            // Grayscale TIFFs of other sample types have their one channel.
+            Err(ImageError::Unsupported(_)) if is_tiff && k == 0 => {
+                return Ok(Self::load_gray_tiff(path)?.with_colour(Colour::Channel(0)))
+            }
+            Err(e) => return Err(image_error(path, e)),
+        };
+        let channels = usize::from(img.color().channel_count());
+        if k >= channels {
+            return Err(IoError::NoChannel {
+                path: path.to_path_buf(),
+                channel: k,
+                channels,
+            });
+        }
+        // As RGBA: a gray image's value is R and its alpha is A.
+        let index = if channels <= 2 && k == 1 { 3 } else { k };
+        let bits = img.color().bytes_per_pixel() / img.color().channel_count();
+        let (width, height) = (img.width() as usize, img.height() as usize);
+        let (data, sample_type): (Vec<f32>, SampleType) = match bits {
+            1 => (
+                img.to_rgba8()
+                    .pixels()
+                    .map(|p| p[index] as f32 / 255.0)
+                    .collect(),
+                SampleType::Uint8,
+            ),
+            2 => (
+                img.to_rgba16()
+                    .pixels()
+                    .map(|p| p[index] as f32 / 65535.0)
+                    .collect(),
+                SampleType::Uint16,
+            ),
+            _ => (
+                img.to_rgba32f().pixels().map(|p| p[index]).collect(),
+                SampleType::Float,
+            ),
+        };
+        if width == 0 || height == 0 {
+            return Err(IoError::empty(path, &[width, height]));
+        }
+        Ok(Image2 {
+            width,
+            height,
+            data,
+            sample_type,
+            colour: Colour::Channel(k),
+            spacing: None,
         })
     }
 
@@ -196,6 +285,11 @@ impl Image2 {
             return Err(IoError::empty(path, &[width, height]));
         }
         let lum = |r: f32, g: f32, b: f32| REC709[0] * r + REC709[1] * g + REC709[2] * b;
+        let colour = if img.color().has_color() {
+            Colour::Luminance
+        } else {
+            Colour::Gray
+        };
         let sample_type = match img.color().bytes_per_pixel() / img.color().channel_count() {
             1 => SampleType::Uint8,
             2 => SampleType::Uint16,
@@ -236,12 +330,37 @@ impl Image2 {
             height,
             data,
             sample_type,
+            colour,
+            spacing: None,
         })
     }
 
     /// How the samples were stored ([`SampleType::Float`] for images built in memory).
     pub fn sample_type(&self) -> SampleType {
         self.sample_type
+    }
+
+    /// How the gray values came from the file's samples.
+    pub fn colour(&self) -> Colour {
+        self.colour
+    }
+
+    /// The pixel size given for the image (x, y), overriding the file's;
+    /// `None` keeps the file's (see `io::resolution`).
+    pub fn spacing(&self) -> Option<[f64; 2]> {
+        self.spacing
+    }
+
+    /// The image with the given pixel size (see [`Image2::spacing`]).
+    pub fn with_spacing(mut self, spacing: Option<[f64; 2]>) -> Self {
+        self.spacing = spacing;
+        self
+    }
+
+    /// The image with its [`Colour`] set to `colour`.
+    pub fn with_colour(mut self, colour: Colour) -> Self {
+        self.colour = colour;
+        self
     }
 
     /// The image with its sample type set (e.g. for data loaded elsewhere).

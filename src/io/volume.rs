@@ -180,13 +180,9 @@ impl Volume {
         if path.is_dir() {
             return Self::load_slices(path);
         }
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().to_ascii_lowercase())
-            .unwrap_or_default();
-        if name.ends_with(".nii") || name.ends_with(".nii.gz") {
+        if is_nifti(path) {
             Self::load_nifti(path)
-        } else if name.ends_with(".tif") || name.ends_with(".tiff") {
+        } else if super::resolution::is_tiff(path) {
             Self::load_tiff(path)
         } else {
             Err(IoError::UnknownType {
@@ -848,6 +844,15 @@ pub fn save_labels_nifti(
 }
 
 /// Decodes one NIfTI sample of `datatype` from its bytes.
+/// Whether the file name says NIfTI (`.nii`, `.nii.gz`), as [`Volume::load`] decides.
+pub fn is_nifti(path: &Path) -> bool {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    name.ends_with(".nii") || name.ends_with(".nii.gz")
+}
+
 /// Writes a whole NIfTI file atomically, gzip-compressed when `path` ends in `.gz`.
 fn write_nifti_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     let gz = path

@@ -9,8 +9,8 @@ use super::{
 use crate::dim::D2;
 use crate::error::{Error, Result};
 use crate::io::intensity::IntensityMap;
-use crate::io::resolution::image_frame;
-use crate::io::{save_gray8_png, Frame, Image2, Overlay, SampleType};
+use crate::io::resolution::{image_frame, is_tiff};
+use crate::io::{save_gray8_png, Colour, Frame, Image2, Overlay, SampleType};
 use crate::phantom::{self, Phantom2Kind};
 use crate::segment::auto::{choose_phases, PhaseChoice};
 use crate::segment::measurements::Measurements;
@@ -38,6 +38,10 @@ pub struct SegmentJob {
     pub outputs: Outputs,
     /// No progress bar.
     pub quiet: bool,
+    /// Segment this channel of a colour image instead of its luminance.
+    pub channel: Option<usize>,
+    /// Pixel size (x, y) to use instead of the file's.
+    pub spacing: Option<[f64; 2]>,
 }
 
 /// The 2D report: the shared fields, the image size and the input's units.
@@ -57,6 +61,8 @@ struct Report<'a> {
 #[derive(Serialize)]
 struct InputSummary {
     sample_type: SampleType,
+    /// Gray samples, the luminance of colour ones, or one channel.
+    colour: Colour,
     min: f64,
     max: f64,
     /// The final phase means by rank (output values 0, 1, ...), in the file's units.
@@ -68,6 +74,7 @@ impl InputSummary {
         let t = image.sample_type();
         InputSummary {
             sample_type: t,
+            colour: image.colour(),
             min: t.to_original(report.intensity.min),
             max: t.to_original(report.intensity.max),
             phase_means: ordered_means
@@ -149,14 +156,23 @@ pub fn save_overlay_png(
 
 /// Loads (or generates) a 2D input, with the phantom's ground truth.
 pub fn load_image(source: &Source) -> Result<(Image2, Option<GroundTruth>)> {
+    load_image_channel(source, None)
+}
+
+/// [`load_image`], taking channel `channel` of a colour image file instead
+/// of its luminance (a note on stderr says when the luminance is taken).
+pub fn load_image_channel(
+    source: &Source,
+    channel: Option<usize>,
+) -> Result<(Image2, Option<GroundTruth>)> {
     match source {
         Source::File(path) => {
             refuse_stacks(path)?;
-            let image = Image2::load(path)?;
-            if is_colour(path) {
+            let image = Image2::load_channel(path, channel)?;
+            if image.colour() == Colour::Luminance {
                 eprintln!(
                     "note: {} is a colour image; it is segmented as its luminance \
-                     (Rec. 709 weights of R, G, B)",
+                     (Rec. 709 weights of R, G, B; --channel K takes one channel)",
                     path.display()
                 );
             }
@@ -182,16 +198,6 @@ pub fn load_image(source: &Source) -> Result<(Image2, Option<GroundTruth>)> {
             "an in-memory image has no file to load".into(),
         )),
     }
-}
-
-/// Whether an image file holds colour (RGB/RGBA) samples.
-fn is_colour(path: &Path) -> bool {
-    use image::ImageDecoder as _;
-    image::ImageReader::open(path)
-        .ok()
-        .and_then(|r| r.with_guessed_format().ok())
-        .and_then(|r| r.into_decoder().ok())
-        .is_some_and(|d| d.color_type().has_color())
 }
 
 /// A multi-page TIFF is a volume: `segment` would read its first page only.
@@ -253,7 +259,13 @@ impl Job for SegmentJob {
     }
 
     fn load(&self) -> Result<(Image2, Option<GroundTruth>)> {
-        load_image(&self.source)
+        if self.channel.is_some() && !matches!(self.source, Source::File(_)) {
+            return Err(Error::Usage(
+                "--channel chooses a channel of an image file".into(),
+            ));
+        }
+        let (image, truth) = load_image_channel(&self.source, self.channel)?;
+        Ok((image.with_spacing(self.spacing), truth))
     }
 
     fn params_for(&self, image: &Image2) -> Result<SegmentParams> {
@@ -350,6 +362,10 @@ pub(crate) fn segment_image_then<T>(
         Source::File(path) => image_frame(path, w, h),
         _ => Frame::image_rows_up(w, h, [1.0, 1.0], "px"),
     };
+    let frame = match image.spacing() {
+        Some([sx, sy]) => frame.respaced([sx, sy, 1.0]),
+        None => frame,
+    };
     let intensity = match &provenance.source {
         Source::File(path) => IntensityMap::of_image_file(path),
         _ => None,
@@ -371,6 +387,7 @@ pub(crate) fn segment_image_then<T>(
         frame,
         measurements,
         render: Render::Image(shown, Box::new(seg.complex().clone()), order),
+        tiff_labels: matches!(&provenance.source, Source::File(path) if is_tiff(path)),
     };
     Ok((result, ready))
 }

@@ -68,9 +68,37 @@ struct Report<'a> {
     #[serde(flatten)]
     run: RunReport<'a>,
     dims: [usize; 3],
+    input: VolumeInput,
     init_surface: Option<&'a Path>,
     junction_edges: usize,
     quality: QualitySummary,
+}
+
+/// The volume's intensity range and final phase means in the file's own
+/// units (the rest of the report is in the loaded units, `[0, 1]` for
+/// 8/16-bit data and stretched from the range for other types), or in the
+/// loaded units when the way back is unknown (an array handed over in memory).
+#[derive(Serialize)]
+struct VolumeInput {
+    /// `"file"` or `"normalised"`.
+    intensity_unit: &'static str,
+    min: f64,
+    max: f64,
+    /// The final phase means by rank (output values 0, 1, ...).
+    phase_means: Vec<Option<f64>>,
+}
+
+impl VolumeInput {
+    fn new(volume: &Volume, report: &SegmentReport, ordered_means: &[Option<f64>]) -> Self {
+        let map = volume.intensity();
+        let original = |v: f64| map.map_or(v, |m| m.original(v));
+        VolumeInput {
+            intensity_unit: if map.is_some() { "file" } else { "normalised" },
+            min: original(report.intensity.min),
+            max: original(report.intensity.max),
+            phase_means: ordered_means.iter().map(|m| m.map(original)).collect(),
+        }
+    }
 }
 
 fn quality(c: &crate::complex::Complex3) -> QualitySummary {
@@ -271,16 +299,19 @@ pub(crate) fn segment_volume_then<T>(
         segment: segment_seconds,
         write: 0.0,
     };
+    let run = RunReport::new(
+        "dsc-seg segment3d",
+        (&provenance.source, provenance.init_labels.as_deref()),
+        &seg,
+        &report,
+        times,
+        truth_dice,
+    );
+    let input = VolumeInput::new(volume, &report, &run.ordered_means);
     let rep = Report {
-        run: RunReport::new(
-            "dsc-seg segment3d",
-            (&provenance.source, provenance.init_labels.as_deref()),
-            &seg,
-            &report,
-            times,
-            truth_dice,
-        ),
+        run,
         dims,
+        input,
         init_surface,
         junction_edges: complex.junction_edges().len(),
         quality: quality(complex),
@@ -317,6 +348,7 @@ pub(crate) fn segment_volume_then<T>(
             order,
             nifti_header: volume.nifti_header().map(<[u8]>::to_vec),
         },
+        tiff_labels: false,
     };
     Ok((result, ready))
 }

@@ -17,8 +17,8 @@ pub mod d2;
 pub mod d3;
 
 pub use d2::{
-    load_image, run_phantom, run_segment, save_overlay_png, segment_image, with_init_labels,
-    SegmentJob,
+    load_image, load_image_channel, run_phantom, run_segment, save_overlay_png, segment_image,
+    with_init_labels, SegmentJob,
 };
 pub use d3::{
     load_volume, run_phantom3d, run_segment3d, segment_volume, with_init_labels3, QualitySummary,

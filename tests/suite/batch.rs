@@ -303,3 +303,61 @@ fn interrupted_runs_leave_no_staging_folders() {
         }
     }
 }
+
+/// NIfTI volumes in a batch give `labels.nii.gz`, a second call skips them,
+/// and `--spacing` applies to every input (and is part of what is skipped).
+#[test]
+fn a_batch_of_nifti_volumes_with_a_voxel_size_is_skipped_when_complete() {
+    use dsc_seg::io::{save_nifti, Volume};
+    let d = tmp();
+    let vols = d.path().join("vols");
+    std::fs::create_dir(&vols).unwrap();
+    for (name, r) in [("a.nii.gz", 4.0), ("b.nii", 5.0)] {
+        let ball = Volume::from_fn(16, 16, 12, |i, j, k| {
+            let d2 = (i as f64 - 8.0).powi(2) + (j as f64 - 8.0).powi(2) + (k as f64 - 6.0).powi(2);
+            if d2 < r * r {
+                0.8
+            } else {
+                0.2
+            }
+        });
+        save_nifti(vols.join(name), &ball).unwrap();
+    }
+    let out = d.path().join("out");
+    let call = |spacing: &str| {
+        bin()
+            .args(["segment3d", "--quiet", "--max-iterations", "4"])
+            .args(["--outputs", "labels,phases,report", "--spacing", spacing])
+            .arg(&vols)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    let first = call("1,1,2");
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    for stem in ["a", "b"] {
+        assert!(out.join(stem).join("labels.nii.gz").is_file());
+        assert!(!out.join(stem).join("labels.tif").exists());
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(stem).join("report.json")).unwrap())
+                .unwrap();
+        assert_eq!(
+            report["frame"]["spacing"],
+            serde_json::json!([1.0, 1.0, 2.0])
+        );
+    }
+    let second = call("1,1,2");
+    assert!(second.status.success());
+    let rows = summary(&out.join("summary.csv"));
+    assert_eq!(row(&rows, "a")[6], "skipped", "{rows:?}");
+    assert_eq!(row(&rows, "b")[6], "skipped", "{rows:?}");
+    let third = call("1,1,1");
+    assert!(third.status.success());
+    let rows = summary(&out.join("summary.csv"));
+    assert_eq!(row(&rows, "a")[6], "done", "{rows:?}");
+}

@@ -702,4 +702,133 @@ fn a_colour_image_is_said_to_be_segmented_as_its_luminance() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stderr).contains("luminance"));
+
+    // --channel 2 takes the blue channel: the disk is phase 0 (darker), no note.
+    let out = d.path().join("run1");
+    let o = bin()
+        .arg("segment")
+        .arg(&p)
+        .args([
+            "--channel",
+            "2",
+            "--quiet",
+            "--outputs",
+            "labels,report",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("luminance"));
+    let labels = image::open(out.join("labels.png")).unwrap().to_luma8();
+    assert_eq!(labels.get_pixel(16, 16)[0], 0);
+    assert_eq!(labels.get_pixel(2, 2)[0], 1);
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(
+        report["input"]["colour"],
+        serde_json::json!({ "channel": 2 })
+    );
+    // Means in the blue channel's units: 40 inside, 160 outside.
+    let means = report["input"]["phase_means"].as_array().unwrap();
+    assert!((means[0].as_f64().unwrap() - 40.0).abs() < 5.0, "{means:?}");
+
+    let message = fails(
+        &SEGMENT,
+        &["--channel", "4", p.to_str().unwrap()],
+        &d.path().join("run2"),
+        "channel",
+    );
+    assert!(
+        message.contains("has no channel 4: it has 3 (0 to 2)"),
+        "{message}"
+    );
+}
+
+#[test]
+fn pixel_size_from_spacing_and_tiff_resolution_reaches_the_outputs() {
+    let d = tmp();
+    let png = write_image(d.path(), 40, 30);
+    let out = d.path().join("run3");
+    let o = bin()
+        .arg("segment")
+        .arg(&png)
+        .args([
+            "--spacing",
+            "0.5,0.25",
+            "--max-iterations",
+            "3",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("phases.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    let total: f64 = rows.iter().map(|r| r[2]).sum();
+    assert!((total - 40.0 * 30.0 * 0.125).abs() < 1e-9, "{csv}");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(
+        report["frame"]["spacing"],
+        serde_json::json!([0.5, 0.25, 1.0])
+    );
+    assert_eq!(report["frame"]["source"], "given");
+    assert!(
+        !out.join("labels.tif").exists(),
+        "a PNG input gives labels.png only"
+    );
+    fails(
+        &SEGMENT,
+        &["--spacing", "1,0", png.to_str().unwrap()],
+        &d.path().join("run4"),
+        "2 positive numbers X,Y",
+    );
+
+    // A TIFF with resolution tags (200 pixels per cm): labels.tif keeps them.
+    let tif = d.path().join("scan.tif");
+    {
+        use tiff::encoder::{colortype::Gray8, Rational, TiffEncoder};
+        use tiff::tags::ResolutionUnit;
+        let gray = image::open(&png).unwrap().to_luma8();
+        let mut enc = TiffEncoder::new(std::fs::File::create(&tif).unwrap()).unwrap();
+        let mut page = enc.new_image::<Gray8>(40, 30).unwrap();
+        page.resolution(ResolutionUnit::Centimeter, Rational { n: 200, d: 1 });
+        page.write_data(gray.as_raw()).unwrap();
+    }
+    let out = d.path().join("run5");
+    let o = bin()
+        .arg("segment")
+        .arg(&tif)
+        .args([
+            "--max-iterations",
+            "3",
+            "--quiet",
+            "--outputs",
+            "labels,report",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let frame = |path: &Path| dsc_seg::io::resolution::image_frame(path, 40, 30);
+    let labels = out.join("labels.tif");
+    assert_eq!(frame(&labels).spacing, frame(&tif).spacing);
+    assert_eq!(frame(&labels).unit, "mm");
+    assert!((frame(&labels).spacing[0] - 0.05).abs() < 1e-12);
+    let png_labels = image::open(out.join("labels.png")).unwrap().to_luma8();
+    let tif_labels = image::open(&labels).unwrap().to_luma8();
+    assert_eq!(png_labels.as_raw(), tif_labels.as_raw());
 }

@@ -1,7 +1,8 @@
 //! The labels do not depend on how the intensities are encoded: the
 //! phantoms as 8-bit PNG, 16-bit PNG with 64 levels, 16-bit PNG offset by
 //! 20000, float32 TIFF in shifted units and negated float32 TIFF give the same
-//! segmentation (mean Dice ≥ 0.99 between runs), in 2D and in 3D.
+//! segmentation (mean Dice ≥ 0.99 between runs), in 2D and in 3D; a 16-bit
+//! volume's report gives its phase means in the file's units.
 
 use dsc_seg::io::{Image2, SampleType};
 use dsc_seg::phantom::{shapes3d, Phantom2Kind};
@@ -146,4 +147,50 @@ fn encodings_of_a_3d_phantom_give_the_same_labels() {
         let dice = mean_dice(&labels, &base, 2);
         assert!(dice >= 0.99, "{what}: Dice {dice}");
     }
+}
+
+/// A 16-bit volume's report gives its range and phase means in the file's
+/// units (levels 20070 and 20180 plus a little texture), as in 2D.
+#[test]
+fn a_16_bit_volume_reports_means_in_its_own_units() {
+    use tiff::encoder::{colortype::Gray16, TiffEncoder};
+    let d = crate::cli::tmp();
+    let n = 12u32;
+    let path = d.path().join("v16.tif");
+    {
+        let mut enc = TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
+        for z in 0..n {
+            let slice: Vec<u16> = (0..n * n)
+                .map(|i| {
+                    let (x, y) = (i % n, i / n);
+                    let inside = [x, y, z].iter().all(|&c| (3..9).contains(&c));
+                    let texture = ((x * 7 + y * 13 + z * 5) % 11) as u16;
+                    20_000 + if inside { 180 } else { 70 } + texture
+                })
+                .collect();
+            enc.write_image::<Gray16>(n, n, &slice).unwrap();
+        }
+    }
+    let out = d.path().join("out");
+    let o = crate::cli::bin()
+        .args(["segment3d", "--quiet", "--outputs", "report", "--out"])
+        .arg(&out)
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let input = &report["input"];
+    assert_eq!(input["intensity_unit"], "file");
+    assert!((input["min"].as_f64().unwrap() - 20_070.0).abs() < 0.01);
+    assert!((input["max"].as_f64().unwrap() - 20_190.0).abs() < 0.01);
+    let means: Vec<f64> = input["phase_means"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m.as_f64().unwrap())
+        .collect();
+    assert!((means[0] - 20_075.0).abs() < 10.0, "{means:?}");
+    assert!((means[1] - 20_185.0).abs() < 10.0, "{means:?}");
 }
