@@ -3,7 +3,9 @@
 //! Each cell stores its `N + 1` vertices (positively oriented) and the neighbour
 //! across the facet opposite each of them (the CGAL/TetGen layout); each vertex
 //! stores one incident cell. Facets and edges stay implicit. This module knows
-//! nothing of images or forces.
+//! nothing of images or forces. Complexes are built from arrays, as box meshes
+//! (`build.rs`), or, with the `tetgen` feature, conforming to a closed
+//! surface (the `surface` module, TetGen).
 
 mod bookkeeping;
 mod build;
@@ -13,6 +15,8 @@ mod export;
 mod interface;
 mod junction;
 mod measure;
+#[cfg(feature = "tetgen")]
+pub mod surface;
 mod validate;
 
 pub use crate::ids::{CellId, Label, VertexId};

@@ -360,7 +360,7 @@ fn surface_segmentation<'a>(
     params: SegmentParams,
     path: &Path,
 ) -> Result<Segmentation<'a, D3>> {
-    use crate::segment::tetgen_init::complex_from_surface;
+    use crate::complex::surface::complex_from_surface;
     if view.spacing != [1.0; 3] {
         return Err(Error::Usage(format!(
             "--init-surface {} is in voxel coordinates: it needs a volume without a voxel size \

@@ -4,7 +4,8 @@
 //!
 //! - [`image`]: the input as a borrowed scalar grid;
 //! - [`raster`]: the dimension-specific part ([`Raster`]: cell over pixels,
-//!   samples along a facet, interpolation), implemented for [`D2`](crate::dim::D2);
+//!   samples along a facet, interpolation), `raster/d2.rs` for triangles over
+//!   pixels, `raster/d3.rs` for tetrahedra over voxels;
 //! - [`integrate`]: per-cell sums (exactly once per pixel, in parallel) and
 //!   per-phase means;
 //! - [`intensity`]: the input's intensity scale (robust range, noise,
@@ -29,9 +30,7 @@
 //! - [`adaptive`]: the sizing field of adaptive resolution (refinement
 //!   where the data is not explained, coarsening where nothing happens);
 //! - [`driver`]: the session loop, the Mumford–Shah energy and the stopping rule;
-//! - [`params`] and [`error`];
-//! - `tetgen_init` (feature `tetgen`): initial 3D complexes conforming to a
-//!   closed surface, built with TetGen.
+//! - [`params`] and [`error`].
 
 pub mod adaptive;
 pub mod auto;
@@ -53,10 +52,7 @@ pub mod params;
 pub mod raster;
 pub mod relaxed_length;
 pub mod reseed;
-#[cfg(feature = "tetgen")]
-pub mod tetgen_init;
 pub mod thresholds;
-pub mod voxel3d;
 
 pub use driver::{IterationRecord, SegmentReport, Segmentation, StageTimes, StopReason};
 pub use error::SegmentError;

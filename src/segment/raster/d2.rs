@@ -1,62 +1,12 @@
-//! The dimension-specific part of the segmentation: which pixels a cell
-//! covers, where to sample a facet, and how to interpolate the image.
-//!
-//! Everything else in [`crate::segment`] is written once against [`Raster`],
-//! implemented for triangles over pixels ([`D2`]) and tetrahedra over voxels
-//! ([`D3`], built on [`voxel3d`](super::voxel3d)).
+//! The 2D rasteriser: the pixels whose centres lie in a triangle, as
+//! contiguous row spans (a fast path for small triangles, a general one for
+//! the rest), facet sampling along segments and bilinear interpolation.
 
-use super::image::ImageView;
+use super::Raster;
 use crate::complex::{BuildError, Complex};
-use crate::dim::{Dim, D2, D3};
-use crate::dsc::Connectivity;
-use nalgebra::{Vector2, Vector3};
-
-/// Image access for cells and facets of dimension `Self`.
-///
-/// Contract for [`Raster::cell_pixels`]: over a complex that tiles the image
-/// domain, every pixel/voxel is visited by exactly one cell (centre rule with
-/// half-open boundaries computed identically by the two cells sharing a facet).
-pub trait Raster: Connectivity {
-    /// Calls `visit(start, end)` for every run of pixels/voxels whose centres
-    /// lie in the cell with the given `NV` corners: the linear indices
-    /// `start..end` are contiguous in memory (one image row, or part of one),
-    /// so callers can sum slices `&data[start..end]` in a tight loop. Runs are
-    /// non-empty and come in increasing index order.
-    fn cell_spans(
-        image: &ImageView<'_>,
-        corners: &[Self::Point],
-        visit: &mut impl FnMut(usize, usize),
-    );
-
-    /// Calls `visit(index)` for the linear index of every pixel/voxel whose
-    /// centre lies in the cell with the given `NV` corners (in increasing
-    /// order; the pixels of [`Raster::cell_spans`] one by one).
-    #[inline]
-    fn cell_pixels(image: &ImageView<'_>, corners: &[Self::Point], visit: &mut impl FnMut(usize)) {
-        Self::cell_spans(image, corners, &mut |a, b| (a..b).for_each(&mut *visit));
-    }
-
-    /// Samples the facet with the given `N` corners about every `spacing`
-    /// units: calls `visit(point, weights, measure)` where `weights` are the
-    /// barycentric (hat) weights of the point over the facet corners and
-    /// `measure` the part of the facet's length/area the sample stands for.
-    fn facet_samples(
-        corners: &[Self::Point],
-        spacing: f64,
-        visit: &mut impl FnMut(Self::Point, &[f64], f64),
-    );
-
-    /// The image interpolated (bi-/trilinearly between sample centres, clamped
-    /// at the border) at a point of the domain.
-    fn sample(image: &ImageView<'_>, p: Self::Point) -> f64;
-
-    /// The centre of the pixel/voxel with the given linear index.
-    fn pixel_centre(image: &ImageView<'_>, index: usize) -> Self::Point;
-
-    /// A complex filling the image domain `[0, dims]` at edge length `l`,
-    /// every cell labelled 0.
-    fn box_complex(image: &ImageView<'_>, l: f64) -> Result<Complex<Self>, BuildError>;
-}
+use crate::dim::D2;
+use crate::segment::image::ImageView;
+use nalgebra::Vector2;
 
 /// `x.ceil() as i64` without a call to libm's `ceil` (the baseline x86-64
 /// target has no `roundsd`, so `f64::ceil` is a function call per row): the
@@ -331,84 +281,6 @@ impl Raster for D2 {
 
     fn box_complex(image: &ImageView<'_>, l: f64) -> Result<Complex<D2>, BuildError> {
         Complex::rectangle(image.dims[0] as f64, image.dims[1] as f64, l)
-    }
-}
-
-/// The dimension's point type, for generic code that names it.
-pub type PointOf<K> = <K as Dim>::Point;
-
-impl Raster for D3 {
-    /// Voxel-centre rule with ties broken by simulation of simplicity
-    /// ([`tet_voxels`](super::voxel3d::tet_voxels)): each voxel of a tiling is
-    /// visited exactly once, whatever lies on shared facets, edges or vertices.
-    fn cell_spans(image: &ImageView<'_>, c: &[Vector3<f64>], visit: &mut impl FnMut(usize, usize)) {
-        let [nx, ny, _] = image.dims;
-        let t = [c[0], c[1], c[2], c[3]];
-        super::voxel3d::tet_voxels(&t, image.dims, image.spacing, |i, j, k| {
-            let index = i + nx * (j + ny * k);
-            visit(index, index + 1)
-        });
-    }
-
-    /// Degree-2 Gaussian quadrature on about `spacing²`-sized sub-triangles
-    /// ([`triangle_quadrature`](super::voxel3d::triangle_quadrature)).
-    fn facet_samples(
-        c: &[Vector3<f64>],
-        spacing: f64,
-        visit: &mut impl FnMut(Vector3<f64>, &[f64], f64),
-    ) {
-        let t = [c[0], c[1], c[2]];
-        super::voxel3d::triangle_quadrature(&t, spacing, |s| {
-            visit(s.position, &s.barycentric, s.weight)
-        });
-    }
-
-    fn sample(image: &ImageView<'_>, p: Vector3<f64>) -> f64 {
-        let mut i0 = [0usize; 3];
-        let mut i1 = [0usize; 3];
-        let mut t = [0.0; 3];
-        for axis in 0..3 {
-            let n = image.dims[axis];
-            let x = (p[axis] / image.spacing[axis] - 0.5).clamp(0.0, (n - 1) as f64);
-            // (truncation: the floor of a non-negative value)
-            i0[axis] = (x as usize).min(n - 1);
-            i1[axis] = (i0[axis] + 1).min(n - 1);
-            t[axis] = x - i0[axis] as f64;
-        }
-        let [nx, ny, _] = image.dims;
-        let v = |i: usize, j: usize, k: usize| image.data[i + nx * (j + ny * k)] as f64;
-        let mut out = 0.0;
-        for corner in 0..8usize {
-            let mut w = 1.0;
-            let mut idx = [0usize; 3];
-            for axis in 0..3 {
-                if corner >> axis & 1 == 1 {
-                    w *= t[axis];
-                    idx[axis] = i1[axis];
-                } else {
-                    w *= 1.0 - t[axis];
-                    idx[axis] = i0[axis];
-                }
-            }
-            if w != 0.0 {
-                out += w * v(idx[0], idx[1], idx[2]);
-            }
-        }
-        out
-    }
-
-    fn pixel_centre(image: &ImageView<'_>, index: usize) -> Vector3<f64> {
-        let [nx, ny, _] = image.dims;
-        let [sx, sy, sz] = image.spacing;
-        Vector3::new(
-            ((index % nx) as f64 + 0.5) * sx,
-            (((index / nx) % ny) as f64 + 0.5) * sy,
-            ((index / (nx * ny)) as f64 + 0.5) * sz,
-        )
-    }
-
-    fn box_complex(image: &ImageView<'_>, l: f64) -> Result<Complex<D3>, BuildError> {
-        Complex::cuboid(image.extent(), l)
     }
 }
 

@@ -1,6 +1,6 @@
-//! The 3D pieces of the segmentation that touch voxels: which voxels a
-//! tetrahedron owns (the voxel-centre rule, every voxel counted exactly once
-//! over a complex), and quadrature over interface triangles.
+//! The 3D rasteriser: which voxels a tetrahedron owns (the voxel-centre
+//! rule, every voxel counted exactly once over a complex), quadrature over
+//! interface triangles and trilinear interpolation.
 //!
 //! Convention: a volume of `nx × ny × nz` voxels occupies the box
 //! `[0, nx] × [0, ny] × [0, nz]`; voxel `(i, j, k)` has its centre at
@@ -14,8 +14,10 @@
 //! predicates on the three coordinate-plane projections, so the rule never
 //! depends on rounding and each centre inside the domain has exactly one owner.
 
-use crate::complex::{CellId, Complex};
+use super::Raster;
+use crate::complex::{BuildError, CellId, Complex};
 use crate::dim::D3;
+use crate::segment::image::ImageView;
 use nalgebra::Vector3;
 
 fn c2(a: f64, b: f64) -> robust::Coord<f64> {
@@ -260,6 +262,79 @@ impl Complex<D3> {
             });
         }
         out
+    }
+}
+
+impl Raster for D3 {
+    /// Voxel-centre rule with ties broken by simulation of simplicity
+    /// ([`tet_voxels`]): each voxel of a tiling is
+    /// visited exactly once, whatever lies on shared facets, edges or vertices.
+    fn cell_spans(image: &ImageView<'_>, c: &[Vector3<f64>], visit: &mut impl FnMut(usize, usize)) {
+        let [nx, ny, _] = image.dims;
+        let t = [c[0], c[1], c[2], c[3]];
+        tet_voxels(&t, image.dims, image.spacing, |i, j, k| {
+            let index = i + nx * (j + ny * k);
+            visit(index, index + 1)
+        });
+    }
+
+    /// Degree-2 Gaussian quadrature on about `spacing²`-sized sub-triangles
+    /// ([`triangle_quadrature`]).
+    fn facet_samples(
+        c: &[Vector3<f64>],
+        spacing: f64,
+        visit: &mut impl FnMut(Vector3<f64>, &[f64], f64),
+    ) {
+        let t = [c[0], c[1], c[2]];
+        triangle_quadrature(&t, spacing, |s| visit(s.position, &s.barycentric, s.weight));
+    }
+
+    fn sample(image: &ImageView<'_>, p: Vector3<f64>) -> f64 {
+        let mut i0 = [0usize; 3];
+        let mut i1 = [0usize; 3];
+        let mut t = [0.0; 3];
+        for axis in 0..3 {
+            let n = image.dims[axis];
+            let x = (p[axis] / image.spacing[axis] - 0.5).clamp(0.0, (n - 1) as f64);
+            // (truncation: the floor of a non-negative value)
+            i0[axis] = (x as usize).min(n - 1);
+            i1[axis] = (i0[axis] + 1).min(n - 1);
+            t[axis] = x - i0[axis] as f64;
+        }
+        let [nx, ny, _] = image.dims;
+        let v = |i: usize, j: usize, k: usize| image.data[i + nx * (j + ny * k)] as f64;
+        let mut out = 0.0;
+        for corner in 0..8usize {
+            let mut w = 1.0;
+            let mut idx = [0usize; 3];
+            for axis in 0..3 {
+                if corner >> axis & 1 == 1 {
+                    w *= t[axis];
+                    idx[axis] = i1[axis];
+                } else {
+                    w *= 1.0 - t[axis];
+                    idx[axis] = i0[axis];
+                }
+            }
+            if w != 0.0 {
+                out += w * v(idx[0], idx[1], idx[2]);
+            }
+        }
+        out
+    }
+
+    fn pixel_centre(image: &ImageView<'_>, index: usize) -> Vector3<f64> {
+        let [nx, ny, _] = image.dims;
+        let [sx, sy, sz] = image.spacing;
+        Vector3::new(
+            ((index % nx) as f64 + 0.5) * sx,
+            (((index / nx) % ny) as f64 + 0.5) * sy,
+            ((index / (nx * ny)) as f64 + 0.5) * sz,
+        )
+    }
+
+    fn box_complex(image: &ImageView<'_>, l: f64) -> Result<Complex<D3>, BuildError> {
+        Complex::cuboid(image.extent(), l)
     }
 }
 
