@@ -16,12 +16,14 @@ usage (from the repository root, after `cargo build --release` and
 `pip install -r benches/compare/requirements.txt`):
 
   python3 benches/real_images.py --out OUT
+  python3 benches/real_images.py --out OUT --args=--adaptive     # any further segment options
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
+import shlex
 import subprocess
 import sys
 
@@ -53,6 +55,8 @@ def main() -> None:
     ap.add_argument("--out", required=True)
     ap.add_argument("--bin", default=os.path.join("target", "release", "dsc-seg"))
     ap.add_argument("--phases", type=int, nargs="+", default=[2, 3, 4])
+    ap.add_argument("--args", default="",
+                    help="further dsc-seg segment options as one string, e.g. --args=--adaptive")
     a = ap.parse_args()
     import skimage.data
 
@@ -76,7 +80,7 @@ def main() -> None:
         for k in a.phases:
             out = os.path.join(a.out, f"{name}_{k}")
             subprocess.run([a.bin, "segment", path, "--phases", str(k), "--out", out, "--quiet",
-                            "--outputs", "labels,report"], check=True)
+                            "--outputs", "labels,report"] + shlex.split(a.args), check=True)
             ours = np.asarray(Image.open(os.path.join(out, "labels.png")))
             theirs = peers.mbo(image, k)
             # energies in the 8-bit image's units: the 16-bit copies are 64x the 8-bit values

@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import subprocess
 import sys
 import time
@@ -116,7 +117,7 @@ def run_peer(name: str, image: np.ndarray, phases: int, truth: np.ndarray, repea
     return result
 
 
-def case(binary, kind, name, size, noise, phases, seed, out, repeat, methods):
+def case(binary, kind, name, size, noise, phases, seed, out, repeat, methods, extra=()):
     """One phantom: writes it, runs dsc-seg and the peers; returns a result row."""
     tag = f"{name}_{size}_s{noise:.2f}"
     folder = os.path.join(out, "3d" if kind == "3d" else "2d", tag)
@@ -132,7 +133,7 @@ def case(binary, kind, name, size, noise, phases, seed, out, repeat, methods):
     image = unit_range(read_image(os.path.join(folder, source)))
     truth = read_image(os.path.join(folder, truth_file))
     row = {"image": tag, "phantom": name, "size": size, "noise": noise, "phases": phases,
-           "dsc-seg": run_ours(binary, ours_args, os.path.join(folder, "dsc-seg"), truth, repeat)}
+           "dsc-seg": run_ours(binary, ours_args + list(extra), os.path.join(folder, "dsc-seg"), truth, repeat)}
     for method in methods:
         if peers.applicable(method, phases, image.ndim):
             row[method] = run_peer(method, image, phases, truth, repeat)
@@ -233,6 +234,8 @@ def parse_args() -> argparse.Namespace:
     ap.add_argument("--methods", nargs="+", choices=PEER_ORDER, default=PEER_ORDER, help="2D peers")
     ap.add_argument("--methods3d", nargs="+", choices=PEER_ORDER, default=PEER_ORDER,
                     help="3D peers (chan_vese is 2D only; morph_chan_vese is the slowest)")
+    ap.add_argument("--args", default="", help="further dsc-seg options as one string "
+                    "(e.g. --args=--adaptive); the tables then show dsc-seg with them")
     ap.add_argument("--memory", nargs="*", type=int, metavar="SIZE",
                     help="also measure dsc-seg's peak memory on two-phase phantoms of these sizes "
                     "(default 1024 4096)")
@@ -261,7 +264,8 @@ def main() -> None:
         for name in a.phantoms:
             phases = known[name]
             for size, noise in cases:
-                row = case(a.bin, "2d", name, size, noise, phases, a.seed, a.out, a.repeat, a.methods)
+                row = case(a.bin, "2d", name, size, noise, phases, a.seed, a.out, a.repeat, a.methods,
+                           shlex.split(a.args))
                 results["two_d"].append(row)
                 save(results, a.out)
                 print(f"{row['image']}: dsc-seg {cell(row['dsc-seg'])}", file=sys.stderr, flush=True)
@@ -272,7 +276,8 @@ def main() -> None:
         volumes += [("brain", BRAIN_SIZE, noise) for noise in a.brain]
         for name, size, noise in volumes:
             phases = 4 if name == "brain" else PHANTOMS_3D[name]
-            row = case(a.bin, "3d", name, size, noise, phases, a.seed, a.out, a.repeat3d, a.methods3d)
+            row = case(a.bin, "3d", name, size, noise, phases, a.seed, a.out, a.repeat3d, a.methods3d,
+                       shlex.split(a.args))
             results["three_d"].append(row)
             save(results, a.out)
             print(f"{row['image']}: dsc-seg {cell(row['dsc-seg'])}" + "".join(
