@@ -427,7 +427,8 @@ impl Batch {
         let row = Row {
             name: stem(input),
             input: input.to_path_buf(),
-            phases: Some(self.params().phases),
+            // The run's own count (`--phases auto` chooses it).
+            phases: Some(summary.final_means.len()),
             iterations: Some(summary.iterations),
             converged: Some(summary.converged),
             seconds: Some(start.elapsed().as_secs_f64()),

@@ -361,3 +361,44 @@ fn a_batch_of_nifti_volumes_with_a_voxel_size_is_skipped_when_complete() {
     let rows = summary(&out.join("summary.csv"));
     assert_eq!(row(&rows, "a")[6], "done", "{rows:?}");
 }
+
+/// With `--phases auto` each row gives the count its run chose.
+#[test]
+fn rows_give_the_phase_count_auto_chose() {
+    let d = tmp();
+    let images = d.path().join("images");
+    let o = bin()
+        .args(["phantom", "four_phase", "--size", "96", "--out"])
+        .arg(&images)
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    for f in ["four_phase_gt.png", "four_phase_labels.png"] {
+        std::fs::remove_file(images.join(f)).unwrap();
+    }
+    write_disk(&images, "disk.png", 48, 1);
+    let out = d.path().join("out");
+    let o = run(
+        &[
+            "--quiet",
+            "--phases",
+            "auto",
+            "--max-phases",
+            "5",
+            "--outputs",
+            "report",
+        ],
+        &[&images],
+        &out,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = summary(&out.join("summary.csv"));
+    for stem in ["four_phase", "disk"] {
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(stem).join("report.json")).unwrap())
+                .unwrap();
+        let chosen = report["params"]["phases"].as_u64().unwrap().to_string();
+        assert_eq!(row(&rows, stem)[2], chosen, "{stem}");
+    }
+    assert_ne!(row(&rows, "four_phase")[2], "2", "not the default count");
+}
