@@ -18,6 +18,7 @@ mod measure;
 #[cfg(feature = "tetgen")]
 pub mod surface;
 mod validate;
+pub mod vtk;
 
 pub use crate::ids::{CellId, Label, VertexId};
 pub use build::BuildError;
@@ -34,10 +35,10 @@ use bookkeeping::Bookkeeping;
 ///
 /// Its operations are documented in blocks named by the layer that adds
 /// them: `complex` (storage, connectivity, construction, classes,
-/// measures, the interface, validation), `ops` (local mesh operations:
-/// moves, flips, collapses, splits, smoothing), `dsc` (the deformation and
-/// the improvement and resizing around it), `segment` (voxel ownership) and
-/// the VTK output.
+/// measures, the interface, validation, VTK files), `ops` (local mesh
+/// operations: moves, flips, collapses, splits, smoothing), `dsc` (the
+/// deformation and the improvement and resizing around it) and `segment`
+/// (voxel ownership).
 #[derive(Clone, Debug)]
 pub struct Complex<K: Dim> {
     positions: Vec<K::Point>,

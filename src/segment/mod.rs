@@ -47,7 +47,6 @@ pub mod intensity;
 pub mod measurements;
 pub mod model;
 pub mod models;
-pub mod output;
 pub mod params;
 pub mod raster;
 pub mod relaxed_length;

@@ -8,7 +8,7 @@
 //! an `order` map (mesh label → output index, e.g. the driver's phases by
 //! increasing mean).
 
-use crate::complex::{Complex, Label};
+use super::{Complex, Label};
 use crate::dim::{Dim, D2, D3};
 use crate::io::{write_vtp, write_vtp_lines, write_vtu, CellArray, Cells, Frame, IoError};
 use std::path::Path;
@@ -104,7 +104,7 @@ impl<const M: usize> Collector<M> {
     }
 }
 
-/// Output: the mesh as a VTK file.
+/// Layer `complex`: the mesh as a VTK file (one writer for both dimensions).
 impl<K: Dim> Complex<K> {
     /// Writes the mesh as `.vtu` in `frame` with the cell data `phase`
     /// (`order[label]`; labels beyond `order` are written as they are).
@@ -133,7 +133,7 @@ impl<K: Dim> Complex<K> {
     }
 }
 
-/// Output: the 2D interface as VTK line segments.
+/// Layer `complex`: the 2D interface as VTK line segments.
 impl Complex<D2> {
     /// The interface segments: every edge between two phases, once.
     pub fn interface_lines(&self) -> InterfaceLines {
@@ -162,7 +162,7 @@ impl Complex<D2> {
     }
 }
 
-/// Output: the 3D interface as a VTK triangle surface.
+/// Layer `complex`: the 3D interface as a VTK triangle surface.
 impl Complex<D3> {
     /// The interface surface: every facet between two phases, once.
     pub fn interface_surface(&self) -> InterfaceSurface {
