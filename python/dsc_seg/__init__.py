@@ -150,13 +150,19 @@ def segment(image: Any, phases: Union[int, str] = 2, **options: Any) -> Segmenta
 
 
 def phantom(
-    name: str = "two_phase", size: int = 256, noise: float = 0.1, seed: int = 1
+    name: str = "two_phase",
+    size: int = 256,
+    noise: float = 0.1,
+    seed: int = 1,
+    ndim: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """A test image and its true labels, as uint8 arrays: the images
     ``dsc-seg phantom`` (2D: ``two_phase``, ``four_phase``, ``fig2`` ...
-    ``fig6``) or ``dsc-seg phantom3d`` (3D: ``two_balls``, ``torus``,
-    ``hollow_sphere``) writes, of side ``size`` with Gaussian noise of
-    standard deviation ``noise`` (intensities in [0, 1]).
+    ``fig6``, ``thin``) or ``dsc-seg phantom3d`` (3D: ``two_balls``, ``torus``,
+    ``hollow_sphere``, ``three_phase``, ``four_phase``, ``brain``) writes, of
+    side ``size`` with Gaussian noise of standard deviation ``noise``
+    (intensities in [0, 1]). A name both know (``four_phase``) gives the 2D
+    image unless ``ndim=3``.
 
     Returns ``(image, truth)``; ``truth`` holds the phase per pixel/voxel."""
-    return _native.phantom(name, size, noise, seed)
+    return _native.phantom(name, size, noise, seed, ndim)

@@ -33,6 +33,11 @@ def segment(
     """Segments a 2D image or 3D volume; keywords are the command line's options."""
 
 def phantom(
-    name: str = "two_phase", size: int = 256, noise: float = 0.1, seed: int = 1
+    name: str = "two_phase",
+    size: int = 256,
+    noise: float = 0.1,
+    seed: int = 1,
+    ndim: int | None = None,
 ) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.uint8]]:
-    """A test image (2D or 3D by name) and its true labels, as uint8 arrays."""
+    """A test image (2D or 3D by name; ``ndim=3`` for the 3D ``four_phase``)
+    and its true labels, as uint8 arrays."""

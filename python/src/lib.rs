@@ -100,6 +100,7 @@ fn phantom<'py>(
     size: usize,
     noise: f64,
     seed: u64,
+    ndim: Option<usize>,
 ) -> PyResult<(Bound<'py, PyArrayDyn<u8>>, Bound<'py, PyArrayDyn<u8>>)> {
     let source = Source::Phantom {
         name: name.to_string(),
@@ -107,7 +108,20 @@ fn phantom<'py>(
         noise,
         seed,
     };
-    let three_d = dsc_seg::phantom::Phantom3Kind::from_name(name).is_some();
+    // A name both commands know (`four_phase`) is the image unless ndim=3.
+    let three_d = match ndim {
+        Some(3) => true,
+        Some(2) => false,
+        Some(n) => {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "ndim={n}: a phantom is 2D or 3D"
+            )))
+        }
+        None => {
+            dsc_seg::phantom::Phantom2Kind::from_name(name).is_none()
+                && dsc_seg::phantom::Phantom3Kind::from_name(name).is_some()
+        }
+    };
     let (samples, truth, shape) = if three_d {
         let (v, truth) = load_volume(&source).map_err(to_py)?;
         let [nx, ny, nz] = v.dims();

@@ -182,3 +182,13 @@ def test_the_gil_is_released_during_a_run():
         thread.join()
         sys.setswitchinterval(old)
     assert during > 5, during
+
+
+def test_a_name_of_both_phantom_commands_is_the_image_unless_ndim_3():
+    image, truth = dsc_seg.phantom("four_phase", size=32)
+    assert image.shape == truth.shape == (32, 32)
+    volume, labels = dsc_seg.phantom("four_phase", size=16, ndim=3)
+    assert volume.shape == labels.shape == (16, 16, 16)
+    assert dsc_seg.phantom("torus", size=16)[0].ndim == 3
+    with pytest.raises(ValueError, match="2D or 3D"):
+        dsc_seg.phantom("torus", size=16, ndim=4)
