@@ -289,10 +289,8 @@ impl<K: Raster> ForceField<K> {
     }
 
     /// Stage 2, facet by facet along the interface: the interface measure,
-    /// the boundary neighbours of each phase, the junctions' outward normals
-    /// per phase, and the region force of eqs. (5)–(7) sampled along the
-    /// facet and spread over its corners with the hat weights.
-    #[allow(clippy::needless_range_loop)] // corners and their points are indexed in pairs
+    /// the facet's topology at its corners ([`add_facet_topology`](Self::add_facet_topology))
+    /// and its region force ([`add_region_force`](Self::add_region_force)).
     fn integrate_facets(
         &mut self,
         complex: &Complex<K>,
@@ -302,85 +300,116 @@ impl<K: Raster> ForceField<K> {
     ) {
         self.facets.clear();
         self.interface_measure = 0.0;
-        let nf = K::N; // corners per facet
         for facet in complex.interface_facets() {
-            let InterfaceFacet {
-                a,
-                b,
-                corners,
-                points: cpts,
-                normal,
-                measure: meas,
-                ..
-            } = facet;
-            self.interface_measure += meas;
-            self.facets.push(Facet {
-                corners,
-                a,
-                b,
-                slots: [[None; 2]; 3],
-            });
-            // neighbours along the boundaries of a and b
-            #[allow(clippy::needless_range_loop)] // p, q index two parallel arrays
-            for p in 0..nf {
-                for q in 0..nf {
-                    if p == q {
-                        continue;
-                    }
-                    let acc = &mut self.acc[corners[p].index()];
-                    for l in [a, b] {
-                        if let Some(sl) = acc.slot(l) {
-                            acc.ncnt[sl] += 1.0;
-                        }
-                    }
-                }
-            }
-            // outward normals per phase at junctions
-            for corner in corners.iter().take(nf) {
-                let acc = &mut self.acc[corner.index()];
-                if self.kinds[corner.index()] == ForceKind::TripleJunction {
-                    if let Some(sa) = acc.slot(a) {
-                        acc.normal[sa] += normal * meas;
-                    }
-                    if let Some(sb) = acc.slot(b) {
-                        acc.normal[sb] -= normal * meas;
-                    }
-                }
-            }
-            let (Some(ma), Some(mb)) = (phases.mean_of(a), phases.mean_of(b)) else {
-                continue;
-            };
-            let gap = ma - mb;
-            if gap.abs() < s.equal_means {
-                continue; // equal means: eq. (6) undefined, no region force
-            }
-            let (acc, kinds) = (&mut self.acc, &self.kinds);
-            K::facet_samples(&cpts[..nf], s.spacing, &mut |p, w, ds| {
-                let intensity = K::sample(image, p);
-                let f = match s.model {
-                    ForceModel::Normalised => (2.0 * intensity - ma - mb) / gap,
-                    ForceModel::ChanVese => (2.0 * intensity - ma - mb) * gap,
-                };
-                for k in 0..nf {
-                    let wk = w[k] * ds;
-                    let ac = &mut acc[corners[k].index()];
-                    match kinds[corners[k].index()] {
-                        ForceKind::Interface => {
-                            ac.ext += normal * (f * wk);
-                            ac.share += wk;
-                        }
-                        ForceKind::TripleJunction => {
-                            ac.share += wk;
-                            match s.junction {
-                                JunctionForce::Paper => junction_weights(ac, phases, intensity, wk),
-                                JunctionForce::EdgeLocal => ac.ext += normal * (f * wk),
-                            }
-                        }
-                        _ => {}
-                    }
-                }
-            });
+            self.interface_measure += facet.measure;
+            self.add_facet_topology(&facet);
+            self.add_region_force(&facet, image, phases, s);
         }
+    }
+
+    /// Records `facet` and adds, at its corners, the boundary neighbours of
+    /// its two phases and, at triple junctions, its measure-weighted normal
+    /// to each phase's outward normal.
+    fn add_facet_topology(&mut self, facet: &InterfaceFacet<K::Point>) {
+        let nf = K::N; // corners per facet
+        let InterfaceFacet {
+            a,
+            b,
+            corners,
+            normal,
+            measure: meas,
+            ..
+        } = *facet;
+        self.facets.push(Facet {
+            corners,
+            a,
+            b,
+            slots: [[None; 2]; 3],
+        });
+        // neighbours along the boundaries of a and b
+        #[allow(clippy::needless_range_loop)] // p, q index two parallel arrays
+        for p in 0..nf {
+            for q in 0..nf {
+                if p == q {
+                    continue;
+                }
+                let acc = &mut self.acc[corners[p].index()];
+                for l in [a, b] {
+                    if let Some(sl) = acc.slot(l) {
+                        acc.ncnt[sl] += 1.0;
+                    }
+                }
+            }
+        }
+        // outward normals per phase at junctions
+        for corner in corners.iter().take(nf) {
+            let acc = &mut self.acc[corner.index()];
+            if self.kinds[corner.index()] == ForceKind::TripleJunction {
+                if let Some(sa) = acc.slot(a) {
+                    acc.normal[sa] += normal * meas;
+                }
+                if let Some(sb) = acc.slot(b) {
+                    acc.normal[sb] -= normal * meas;
+                }
+            }
+        }
+    }
+
+    /// The region force of eqs. (5)–(7) sampled along `facet` and spread
+    /// over its corners with the hat weights: along the normal at two-phase
+    /// vertices, as eq. (7) weights (or along the normal, per
+    /// [`JunctionForce`]) at triple junctions. Nothing where the two phases'
+    /// means are missing or equal.
+    #[allow(clippy::needless_range_loop)] // corners and weights are indexed in pairs
+    fn add_region_force(
+        &mut self,
+        facet: &InterfaceFacet<K::Point>,
+        image: &ImageView<'_>,
+        phases: &PhaseStats,
+        s: &ForceSettings,
+    ) {
+        let nf = K::N; // corners per facet
+        let InterfaceFacet {
+            a,
+            b,
+            corners,
+            points: cpts,
+            normal,
+            ..
+        } = *facet;
+        let (Some(ma), Some(mb)) = (phases.mean_of(a), phases.mean_of(b)) else {
+            return;
+        };
+        let gap = ma - mb;
+        if gap.abs() < s.equal_means {
+            return; // equal means: eq. (6) undefined, no region force
+        }
+        let (acc, kinds) = (&mut self.acc, &self.kinds);
+        K::facet_samples(&cpts[..nf], s.spacing, &mut |p, w, ds| {
+            let intensity = K::sample(image, p);
+            let f = match s.model {
+                ForceModel::Normalised => (2.0 * intensity - ma - mb) / gap,
+                ForceModel::ChanVese => (2.0 * intensity - ma - mb) * gap,
+            };
+            for k in 0..nf {
+                let wk = w[k] * ds;
+                let ac = &mut acc[corners[k].index()];
+                match kinds[corners[k].index()] {
+                    ForceKind::Interface => {
+                        ac.ext += normal * (f * wk);
+                        ac.share += wk;
+                    }
+                    ForceKind::TripleJunction => {
+                        ac.share += wk;
+                        match s.junction {
+                            JunctionForce::Paper => junction_weights(ac, phases, intensity, wk),
+                            JunctionForce::EdgeLocal => ac.ext += normal * (f * wk),
+                        }
+                    }
+                    _ => {}
+                }
+            }
+        });
     }
 
     /// Stage 3: the umbrella `ΔX` and the bending direction `−Δ²X`, the
