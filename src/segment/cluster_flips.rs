@@ -14,6 +14,13 @@
 //! after the other on the labels as they are then (an ICM sweep over
 //! clusters, which cannot raise the energy).
 //!
+//! Only clusters inside their phase (bordering no cell of another phase)
+//! are considered: they are the structure no interface has reached yet.
+//! Along an interface the motion of the interface does that work, and
+//! between two phases a cluster nearest a third is the band of intermediate
+//! values a blurred edge leaves, which the component flips remove: flipping
+//! it would undo them every other iteration.
+//!
 //! The border of a cluster of small cells is a staircase, up to twice as
 //! long as the interface it becomes once the forces have relaxed it; in 2D
 //! its length change is counted at the relaxed length
@@ -48,6 +55,8 @@ struct Cluster {
     stats: CellStats,
     /// Interface length (area in 3D) the relabelling adds (negative: removes).
     added_length: f64,
+    /// Whether it borders a cell of another phase than its own.
+    borders_other_phase: bool,
 }
 
 impl ClusterFlipper {
@@ -111,6 +120,9 @@ impl ClusterFlipper {
                 continue;
             }
             let cluster = self.grow(complex, cells, start);
+            if cluster.borders_other_phase {
+                continue;
+            }
             let (Some(m_own), Some(m_target)) =
                 (phases.mean_of(cluster.own), phases.mean_of(cluster.target))
             else {
@@ -178,6 +190,7 @@ impl ClusterFlipper {
             target,
             stats: CellStats::default(),
             added_length: 0.0,
+            borders_other_phase: false,
         };
         self.members.clear();
         self.border.clear();
@@ -208,8 +221,11 @@ impl ClusterFlipper {
                     }
                 } else if l == own {
                     cluster.added_length += K::facet_measure(&pts[..K::NV], f);
-                } else if l == target {
-                    cluster.added_length -= K::facet_measure(&pts[..K::NV], f);
+                } else {
+                    cluster.borders_other_phase = true;
+                    if l == target {
+                        cluster.added_length -= K::facet_measure(&pts[..K::NV], f);
+                    }
                 }
             }
         }
