@@ -1,4 +1,4 @@
-use super::Dim;
+use super::{Dim, QualityDefaults};
 use crate::ids::{CellId, VertexId};
 use nalgebra::Vector2;
 
@@ -29,10 +29,19 @@ impl Dim for D2 {
     const EDGE_JUNCTIONS: bool = false;
     const SAMPLES: &'static str = "pixels";
     const SMALLEST_GRID: &'static str = "2×2";
+    const SPLITS_UNCOLLAPSIBLE: bool = false;
     type Point = Vector2<f64>;
     type Cell = [VertexId; 3];
     type Neighbours = [Option<CellId>; 3];
 
+    /// Degenerate below a 2° smallest angle, improved below 10°.
+    fn quality_defaults() -> QualityDefaults {
+        QualityDefaults {
+            degenerate: D2::quality_of_min_angle(2.0),
+            minimum: D2::quality_of_min_angle(10.0),
+            straight_angle_deg: 10.0,
+        }
+    }
     fn cell(v: &[VertexId]) -> Self::Cell {
         [v[0], v[1], v[2]]
     }

@@ -1,4 +1,4 @@
-use super::Dim;
+use super::{Dim, QualityDefaults};
 use crate::ids::{CellId, VertexId};
 use nalgebra::Vector3;
 
@@ -20,10 +20,19 @@ impl Dim for D3 {
     const EDGE_JUNCTIONS: bool = true;
     const SAMPLES: &'static str = "voxels";
     const SMALLEST_GRID: &'static str = "2×2×2";
+    const SPLITS_UNCOLLAPSIBLE: bool = true;
     type Point = Vector3<f64>;
     type Cell = [VertexId; 4];
     type Neighbours = [Option<CellId>; 4];
 
+    /// Interface faces are flat when adjacent normals satisfy |n1·n2| ≥ 0.995.
+    fn quality_defaults() -> QualityDefaults {
+        QualityDefaults {
+            degenerate: 0.02,
+            minimum: 0.3,
+            straight_angle_deg: 0.995f64.acos().to_degrees(),
+        }
+    }
     fn cell(v: &[VertexId]) -> Self::Cell {
         [v[0], v[1], v[2], v[3]]
     }

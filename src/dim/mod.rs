@@ -23,6 +23,19 @@ mod sealed {
     impl Sealed for super::D3 {}
 }
 
+/// The default quality thresholds of a dimension's mesh (see
+/// [`DscParams`](crate::dsc::DscParams), which starts from them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QualityDefaults {
+    /// A cell below this quality is degenerate and removed.
+    pub degenerate: f64,
+    /// A collapse is safe only if the cells it creates reach this quality.
+    pub minimum: f64,
+    /// Interface facets meeting within this angle (degrees) of a straight
+    /// line or plane count as flat.
+    pub straight_angle_deg: f64,
+}
+
 /// A spatial dimension (2 or 3) with the cell shape that fills it.
 pub trait Dim: sealed::Sealed + Copy + Clone + Debug + Default + Send + Sync + 'static {
     /// Spatial dimension.
@@ -39,6 +52,10 @@ pub trait Dim: sealed::Sealed + Copy + Clone + Debug + Default + Send + Sync + '
     const SAMPLES: &'static str;
     /// The smallest grid a mesh can cover ("2×2", "2×2×2").
     const SMALLEST_GRID: &'static str;
+    /// Whether a degenerate cell that no collapse removes is split at its
+    /// longest edge (3D, where slivers whose every collapse would invert a
+    /// neighbour are common); in 2D such a triangle is left as it is.
+    const SPLITS_UNCOLLAPSIBLE: bool;
     /// A point or vector of the space.
     type Point: Point;
     /// The `N + 1` vertices of a cell, positively oriented.
@@ -52,6 +69,8 @@ pub trait Dim: sealed::Sealed + Copy + Clone + Debug + Default + Send + Sync + '
         + AsRef<[Option<CellId>]>
         + AsMut<[Option<CellId>]>;
 
+    /// The default quality thresholds of the mesh in this dimension.
+    fn quality_defaults() -> QualityDefaults;
     /// Builds a cell from exactly `NV` vertex ids.
     fn cell(vertices: &[VertexId]) -> Self::Cell;
     /// A neighbour array with every entry `None`.

@@ -470,8 +470,8 @@ impl<K: Connectivity> Complex<K> {
                     }
                     kept
                 }
-                // 3D: no collapse removes it; split its longest edge if longer than h.
-                None if K::N == 3 => {
+                // No collapse removes it; split its longest edge if longer than h.
+                None if K::SPLITS_UNCOLLAPSIBLE => {
                     let (u, v) = self.longest_edge(c);
                     let h = sizing.at_cell(&self.cell_points(c)[..K::NV], params.edge_length);
                     let long =

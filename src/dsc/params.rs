@@ -1,6 +1,6 @@
 //! The DSC's thresholds, all derived from the one user parameter: the average edge length.
 
-use crate::dim::{Dim, D2};
+use crate::dim::Dim;
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -66,20 +66,11 @@ fn default_coarsen_length() -> f64 {
 impl DscParams {
     /// The defaults for dimension `K` at average edge length `edge_length`.
     pub fn new<K: Dim>(edge_length: f64) -> Self {
-        // 3D: interface faces are flat when adjacent normals satisfy |n1·n2| >= 0.995.
-        let (degenerate_quality, min_quality, straight_angle_deg) = if K::N == 2 {
-            (
-                D2::quality_of_min_angle(2.0),
-                D2::quality_of_min_angle(10.0),
-                10.0,
-            )
-        } else {
-            (0.02, 0.3, 0.995f64.acos().to_degrees())
-        };
+        let quality = K::quality_defaults();
         DscParams {
             edge_length,
-            degenerate_quality,
-            min_quality,
+            degenerate_quality: quality.degenerate,
+            min_quality: quality.minimum,
             low_quality: 0.3,
             max_length: 2.0,
             min_length: 0.5,
@@ -89,7 +80,7 @@ impl DscParams {
             min_measure: 0.2,
             degenerate_measure: 0.04,
             move_tolerance: 1e-4,
-            straight_angle_deg,
+            straight_angle_deg: quality.straight_angle_deg,
             max_rounds: 10,
         }
     }
@@ -199,7 +190,7 @@ impl DscParams {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dim::D3;
+    use crate::dim::{D2, D3};
 
     #[test]
     fn defaults_are_valid_in_both_dimensions() {
