@@ -56,7 +56,7 @@ pub struct EvolutionArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub min_edge_length: Option<f64>,
     /// Largest target edge length of the adaptive mesh [default: smallest
-    /// side/16, at least L]; implies --adaptive.
+    /// side/16 (3D: /10), at least L]; implies --adaptive.
     #[arg(long, allow_hyphen_values = true)]
     pub max_edge_length: Option<f64>,
     /// Adaptive runs: start from a mesh at the largest edge length and
@@ -246,6 +246,10 @@ pub struct Segment3dOptions {
     /// their directions and voxel 0 its place).
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub spacing: Option<String>,
+    /// The paper's uniform mesh at L everywhere, started at L, instead of
+    /// the 3D default (adaptive resolution from a coarse start).
+    #[arg(long, conflicts_with_all = ["adaptive", "min_edge_length", "max_edge_length", "coarse_start"])]
+    pub uniform: bool,
     /// The evolution's options.
     #[command(flatten)]
     pub evolution: EvolutionArgs,
@@ -262,6 +266,10 @@ impl Segment3dOptions {
     pub fn params(&self) -> Result<SegmentParams> {
         let mut params = SegmentParams::new_3d(phase_count(Some(self.phases), 2)?);
         params.edge_length = self.edge_length;
+        if self.uniform {
+            params.sizing.adaptive = false;
+            params.sizing.coarse_start = false;
+        }
         self.evolution.apply(&mut params);
         let init = match (self.init, self.balls.is_empty()) {
             (None, false) => Init3Kind::Balls,

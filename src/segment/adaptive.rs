@@ -41,7 +41,7 @@ pub struct SizingParams {
     /// Smallest target edge length `h_min` in pixels (`None`: 1.5).
     pub min_edge_length: Option<f64>,
     /// Largest target edge length `h_max` in pixels (`None`: the smallest
-    /// image extent / 16, at least `L`).
+    /// image extent / 16 in 2D, / 10 in 3D, at least `L`).
     pub max_edge_length: Option<f64>,
     /// Gradation `g`: `h(a) ≤ h(b) + g·|a − b|`, so neighbouring cells of
     /// size about `h` differ by at most a factor of about `1 + g`.
@@ -77,6 +77,18 @@ const REFINE_FACTOR: f64 = 0.3;
 /// The smallest target edge length when none is given.
 pub const DEFAULT_MIN_EDGE_LENGTH: f64 = 1.5;
 
+/// The default `h_max` is the smallest extent divided by this: 16 in 2D,
+/// 10 in 3D, where a cell of the same relative size holds far fewer voxels
+/// (a 64³ volume's interior cells then hold about 40 voxels, a 512² image's
+/// about 500 pixels).
+fn default_coarsening(dimension: usize) -> f64 {
+    if dimension >= 3 {
+        10.0
+    } else {
+        16.0
+    }
+}
+
 /// The resolved sizes of a run.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Sizes {
@@ -95,7 +107,10 @@ impl SizingParams {
     /// interface edge length `l`: `h_min ≤ L ≤ h_max`.
     pub fn sizes(&self, dims: &[usize], l: f64) -> Sizes {
         let extent = dims.iter().copied().min().unwrap_or(1) as f64;
-        let h_max = self.max_edge_length.unwrap_or(extent / 16.0).max(l);
+        let h_max = self
+            .max_edge_length
+            .unwrap_or(extent / default_coarsening(dims.len()))
+            .max(l);
         let h_min = self
             .min_edge_length
             .unwrap_or(DEFAULT_MIN_EDGE_LENGTH)

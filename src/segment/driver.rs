@@ -216,6 +216,9 @@ pub struct Segmentation<'a, K: Raster> {
     step: f64,
     best_energy: f64,
     stalled: usize,
+    /// Iterations since the energy last reached a new low (not reset when
+    /// the step is halved): the plateau of [`SegmentParams::converge_plateau`].
+    since_new_low: usize,
 }
 
 impl<'a, K: Raster> Segmentation<'a, K> {
@@ -358,6 +361,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             step: 0.0,
             best_energy: f64::INFINITY,
             stalled: 0,
+            since_new_low: 0,
         };
         s.step = s.params.step_fraction;
         s.nu = s.length_weight();
@@ -550,7 +554,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         if rec.energy < self.best_energy - 3e-4 * rec.energy.abs() {
             self.best_energy = rec.energy;
             self.stalled = 0;
+            self.since_new_low = 0;
         } else {
+            self.since_new_low += 1;
             self.stalled += 1;
             if self.stalled >= STALL_ITERATIONS {
                 self.step = (self.step * 0.5).max(self.params.step_fraction / 16.0);
@@ -638,6 +644,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             self.quiet_iterations = 0;
             self.best_energy = f64::INFINITY;
             self.stalled = 0;
+            self.since_new_low = 0;
             self.step = self.params.step_fraction;
         }
         self.times.flips += t.elapsed().as_secs_f64();
@@ -757,6 +764,10 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// Whether the stopping rule is met.
     pub fn converged(&self) -> bool {
         self.quiet_iterations >= self.params.converge_iterations
+            || self
+                .params
+                .converge_plateau
+                .is_some_and(|n| self.since_new_low >= n)
     }
 
     /// Iterates until the built-in stopping rule ([`converged`](Self::converged))
