@@ -57,7 +57,10 @@ fn coarse_to_fine_3d_keeps_the_dice_with_fewer_tets() {
     let mut params = SegmentParams::new_3d(2);
     params.max_iterations = 60;
     params.sizing.max_edge_length = Some(6.0);
-    let (uniform, uniform_dice) = run::<D3>(view(), params.clone(), &ph.truth);
+    let mut uniform_params = params.clone();
+    uniform_params.sizing.adaptive = false;
+    uniform_params.sizing.coarse_start = false;
+    let (uniform, uniform_dice) = run::<D3>(view(), uniform_params, &ph.truth);
     let (graded, graded_dice) = run::<D3>(view(), adaptive(params, true), &ph.truth);
     assert!(
         graded_dice > uniform_dice - 0.01,

@@ -4,28 +4,53 @@
 use std::path::Path;
 use std::process::Command;
 
-fn segment(out: &Path, threads: &str) -> (Vec<u8>, Vec<u8>) {
+/// Runs `dsc-seg` with `args` on `threads` rayon threads; returns the bytes
+/// of `labels` and `mesh.vtu`.
+fn run(args: &[&str], labels: &str, out: &Path, threads: &str) -> (Vec<u8>, Vec<u8>) {
     let status = Command::new(env!("CARGO_BIN_EXE_dsc-seg"))
-        .args([
-            "segment",
-            "--phantom",
-            "four_phase",
-            "--phantom-size",
-            "128",
-            "--quiet",
-            "--max-iterations",
-            "60",
-            "--out",
-        ])
+        .args(args)
+        .args(["--quiet", "--out"])
         .arg(out)
         .env("RAYON_NUM_THREADS", threads)
         .status()
         .expect("run dsc-seg");
     assert!(status.success());
     (
-        std::fs::read(out.join("labels.png")).unwrap(),
+        std::fs::read(out.join(labels)).unwrap(),
         std::fs::read(out.join("mesh.vtu")).unwrap(),
     )
+}
+
+fn segment(out: &Path, threads: &str) -> (Vec<u8>, Vec<u8>) {
+    let args = [
+        "segment",
+        "--phantom",
+        "four_phase",
+        "--phantom-size",
+        "128",
+        "--max-iterations",
+        "60",
+    ];
+    run(&args, "labels.png", out, threads)
+}
+
+/// The 3D default (adaptive, coarse start) on the four-phase volume, whose
+/// junction curves and graded mesh exercise every parallel section.
+fn segment3d(out: &Path, threads: &str) -> (Vec<u8>, Vec<u8>) {
+    let args = [
+        "segment3d",
+        "--phantom",
+        "four_phase",
+        "--phantom-size",
+        "40",
+        "--phantom-noise",
+        "0.2",
+        "--phases",
+        "4",
+        "--max-iterations",
+        "25",
+    ];
+    run(&args, "labels.tif", out, threads)
 }
 
 #[test]
@@ -35,6 +60,17 @@ fn outputs_are_bit_identical_across_runs_and_thread_counts() {
     let two = segment(&dir.path().join("two"), "2");
     let again = segment(&dir.path().join("again"), "2");
     assert!(one.0 == two.0, "labels.png differs between 1 and 2 threads");
+    assert!(one.1 == two.1, "mesh.vtu differs between 1 and 2 threads");
+    assert!(two == again, "outputs differ between two identical runs");
+}
+
+#[test]
+fn volume_outputs_are_bit_identical_across_runs_and_thread_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = segment3d(&dir.path().join("one"), "1");
+    let two = segment3d(&dir.path().join("two"), "2");
+    let again = segment3d(&dir.path().join("again"), "2");
+    assert!(one.0 == two.0, "labels.tif differs between 1 and 2 threads");
     assert!(one.1 == two.1, "mesh.vtu differs between 1 and 2 threads");
     assert!(two == again, "outputs differ between two identical runs");
 }

@@ -139,14 +139,31 @@ fn encodings_of_a_3d_phantom_give_the_same_labels() {
             true,
         ),
     ];
+    let base_truth = mean_dice(&base, &ph.truth, 2);
+    let mut failures = Vec::new();
     for (what, data, negate) in encodings {
         let mut labels = labels_3d(&data, n);
         if negate {
             labels = reversed(&labels, 2);
         }
         let dice = mean_dice(&labels, &base, 2);
-        assert!(dice >= 0.99, "{what}: Dice {dice}");
+        let truth = mean_dice(&labels, &ph.truth, 2);
+        // 64 levels lose information (a run on other data may stop at
+        // another iteration): it must be as accurate; the exact
+        // re-encodings must give the same labels.
+        let lossy = what.contains("64 levels");
+        let ok = if lossy {
+            truth >= base_truth - 0.005
+        } else {
+            dice >= 0.99
+        };
+        if !ok {
+            failures.push(format!(
+                "{what}: Dice {dice} with the 8-bit labels, {truth} with the truth ({base_truth} 8-bit)"
+            ));
+        }
     }
+    assert!(failures.is_empty(), "{failures:?}");
 }
 
 /// A 16-bit volume's report gives its range and phase means in the file's
