@@ -1,7 +1,8 @@
 //! One iteration of the 3D segmentation (integrate, flips, forces, deform) on
 //! the 128³ two-balls phantom at the default edge length, after a few warm-up
-//! iterations so the interface sits near the objects: with the uniform mesh,
-//! and with the adaptive one started coarse (`--adaptive --coarse-start`).
+//! iterations so the interface sits near the objects: with the uniform mesh
+//! (`--uniform`),
+//! and with the adaptive one started coarse (the 3D default).
 //! Prints the tet counts.
 //! Peak memory: run the `segment3d` command under `/usr/bin/time -v`.
 
