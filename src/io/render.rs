@@ -404,19 +404,7 @@ impl<'a> Overlay<'a> {
         if iface.is_empty() {
             return layers;
         }
-        if self.two_sided {
-            layers.push(Layer {
-                rgb: [0, 0, 0],
-                alpha: 0.55,
-                width: self.line_width + 2.0,
-                segments: iface
-                    .iter()
-                    .map(|e| [p(e.vertices[0]), p(e.vertices[1])])
-                    .collect(),
-            });
-            layers.extend(self.sided_layers());
-            return layers;
-        }
+        // A dark outline under every interface, whichever way it is coloured.
         layers.push(Layer {
             rgb: [0, 0, 0],
             alpha: 0.55,
@@ -426,6 +414,10 @@ impl<'a> Overlay<'a> {
                 .map(|e| [p(e.vertices[0]), p(e.vertices[1])])
                 .collect(),
         });
+        if self.two_sided {
+            layers.extend(self.sided_layers());
+            return layers;
+        }
         let mut by_phase: Vec<(u32, Vec<[[f64; 2]; 2]>)> = Vec::new();
         for e in &iface {
             let ph = e.phases[1];
