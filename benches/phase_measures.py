@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """phases.csv against the phantoms' ground truth: per phase the area (2D) or
-volume (3D) from the labels and from the mesh, against the ground-truth
-pixel/voxel count and (3D) the analytic solid; for 3D also the noise-free
+volume (3D) by partial volume (`pv_area_*`/`pv_volume_*`, the estimate to
+use, with its noise standard error), from the label count and from the
+mesh, against the ground-truth pixel/voxel count and (3D) the analytic solid; for 3D also the noise-free
 optimum of the two-phase piecewise-constant model (the threshold halfway
 between the means of the voxels above and below it, at its fixed point),
 which is where the model puts a blurred edge.
@@ -46,9 +47,16 @@ def read_stack(path):
 
 
 def phases_csv(path):
+    """Per phase (partial volume, its standard error, count measure, mesh measure)."""
     rows = list(csv.DictReader(open(path)))
     keys = list(rows[0])
-    return [(float(r[keys[2]]), float(r[keys[3]])) for r in rows]
+
+    def column(prefix):
+        return next(k for k in keys if k.startswith(prefix) and "_se_" not in k)
+
+    pv, count, mesh = column("pv_"), column("count_"), column("mesh_")
+    se = next(k for k in keys if k.startswith("pv_") and "_se_" in k)
+    return [(float(r[pv]), float(r[se]), float(r[count]), float(r[mesh])) for r in rows]
 
 
 def pct(a, b):
@@ -67,8 +75,8 @@ def model_volume(image):
 
 
 def two_d(out, sizes, sigmas):
-    print("| image | phase | truth px | labels | mesh |")
-    print("|---|---|---|---|---|")
+    print("| image | phase | truth px | partial volume (± s.e.) | labels | mesh |")
+    print("|---|---|---|---|---|---|")
     for name, phases in (("two_phase", 2), ("four_phase", 4)):
         for n in sizes:
             for s in sigmas:
@@ -79,14 +87,16 @@ def two_d(out, sizes, sigmas):
                 run("segment", os.path.join(data, name + ".png"), "--phases", phases,
                     "--quiet", "--outputs", "labels,phases", "--out", res)
                 truth = np.array(Image.open(os.path.join(data, name + "_labels.png")))
-                for p, (area, mesh) in enumerate(phases_csv(os.path.join(res, "phases.csv"))):
+                for p, (pv, se, area, mesh) in enumerate(phases_csv(os.path.join(res, "phases.csv"))):
                     count = int((truth == p).sum())
-                    print(f"| {tag} | {p} | {count} | {pct(area, count)} | {pct(mesh, count)} |")
+                    print(f"| {tag} | {p} | {count} | {pct(pv, count)} ± {100 * se / count:.2f}% "
+                          f"| {pct(area, count)} | {pct(mesh, count)} |")
 
 
 def three_d(out, sizes, sigmas):
-    print("| volume | truth voxels | analytic | labels | mesh | model (noise-free) |")
-    print("|---|---|---|---|---|---|")
+    print("| volume | truth voxels | analytic | partial volume (± s.e.) | labels | mesh "
+          "| model (noise-free) |")
+    print("|---|---|---|---|---|---|---|")
     for n in sizes:
         for name in ANALYTIC:
             clean = os.path.join(out, f"{name}_{n}_clean")
@@ -101,8 +111,9 @@ def three_d(out, sizes, sigmas):
                     "--outputs", "labels,phases", "--out", res)
                 count = int((read_stack(os.path.join(data, name + "_labels.tif")) == 1).sum())
                 analytic = ANALYTIC[name] * n**3
-                vol, mesh = phases_csv(os.path.join(res, "phases.csv"))[1]
-                print(f"| {tag} | {count} | {pct(analytic, count)} | {pct(vol, count)} "
+                pv, se, vol, mesh = phases_csv(os.path.join(res, "phases.csv"))[1]
+                print(f"| {tag} | {count} | {pct(analytic, count)} "
+                      f"| {pct(pv, count)} ± {100 * se / count:.2f}% | {pct(vol, count)} "
                       f"| {pct(mesh, count)} | {pct(model, count)} |")
 
 

@@ -30,7 +30,8 @@ pub struct Segmented {
     /// row-major `height × width`, or `nz × ny × nx`.
     pub labels: Vec<u8>,
     /// Vertex positions of the final mesh, 2 (2D) or 3 (3D) per vertex, in
-    /// pixel/voxel units.
+    /// the mesh's own units: pixels in 2D, the volume's length unit in 3D
+    /// (see [`Segmented::physical_vertices`]).
     pub vertices: Vec<f64>,
     /// The mesh's triangles (3 vertex indices each) or tetrahedra (4).
     pub cells: Vec<u32>,
@@ -208,6 +209,21 @@ impl Segmented {
     /// Whether this is a 3D segmentation.
     pub fn is_3d(&self) -> bool {
         self.dims.len() == 3
+    }
+
+    /// [`Segmented::vertices`] in the input's physical units (the frame's
+    /// spacing per pixel/voxel) from the outer corner of pixel/voxel 0, along
+    /// the index axes: a 2D mesh, which works in pixels, is scaled by the
+    /// pixel size; a 3D mesh already works in these units.
+    pub fn physical_vertices(&self) -> Vec<f64> {
+        let d = self.dims.len();
+        let scale: Vec<f64> = (0..d)
+            .map(|c| self.frame.spacing[c] / self.frame.domain_scale[c])
+            .collect();
+        self.vertices
+            .chunks_exact(d)
+            .flat_map(|p| p.iter().zip(&scale).map(|(x, s)| x * s))
+            .collect()
     }
 
     /// Writes `outputs` into `dir` (created if missing), all or nothing.

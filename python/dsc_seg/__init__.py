@@ -69,9 +69,10 @@ class Segmentation:
         ``labels.png`` / ``labels.tif``.
     vertices : numpy.ndarray
         The final mesh's vertex positions (float64, ``n × 2`` or ``n × 3``;
-        x, y[, z] in pixels/voxels, x along the last array axis; a volume's
-        scaled by ``spacing`` when given; a 2D mesh stays in pixels, its
-        ``report`` measurements use ``spacing``).
+        x, y[, z], x along the last array axis) in the units of ``spacing``
+        (1 per pixel/voxel without it), from the outer corner of the first
+        pixel/voxel, in 2D as in 3D; pixel ``(i, j)``'s centre is at
+        ``((i + 0.5)·sx, (j + 0.5)·sy)``.
     cells : numpy.ndarray
         Its triangles (2D) or tetrahedra (3D) as vertex indices (uint32).
     cell_phases : numpy.ndarray

@@ -164,12 +164,14 @@ impl Segmentation {
         array(py, self.inner.labels.clone(), &shape)
     }
 
-    /// Vertex positions of the final mesh (float64, vertices × 2 or 3), x first, in pixels/voxels.
+    /// Vertex positions of the final mesh (float64, vertices × 2 or 3), x first, in the
+    /// input's physical units (`spacing`, 1 per pixel/voxel without it) from the outer corner
+    /// of pixel/voxel 0, in 2D as in 3D.
     #[getter]
     fn vertices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let d = self.inner.dims.len();
         let n = self.inner.vertices.len() / d;
-        array(py, self.inner.vertices.clone(), &[n, d])
+        array(py, self.inner.physical_vertices(), &[n, d])
     }
 
     /// The mesh's triangles (2D) or tetrahedra (3D) as vertex indices (uint32, cells × 3 or 4).

@@ -107,10 +107,15 @@ def test_spacing_gives_an_image_its_pixel_size():
     spaced = dsc_seg.segment(image, max_iterations=5, spacing=(0.5, 0.25))
     assert np.array_equal(plain.labels, spaced.labels)
     assert spaced.report["frame"]["spacing"][:2] == [0.5, 0.25]
+    assert plain.report["phases"]["unit"] == "px"
+    assert spaced.report["phases"]["unit"] == "unit"
     for a, b in zip(plain.report["phases"]["phases"], spaced.report["phases"]["phases"]):
         assert b["count"] == a["count"]
-        assert b["measure"] == pytest.approx(a["measure"] * 0.125)
-        assert b["mesh_measure"] == pytest.approx(a["mesh_measure"] * 0.125)
+        for key in ("count_measure", "mesh_measure", "partial_volume", "partial_volume_se"):
+            assert b[key] == pytest.approx(a[key] * 0.125)
+    # The vertices are in the units of spacing, as a volume's are.
+    assert np.allclose(spaced.vertices, plain.vertices * [0.5, 0.25])
+    assert plain.vertices.max(axis=0).tolist() == [64, 64]
     with pytest.raises(ValueError, match="2 positive numbers"):
         dsc_seg.segment(image, spacing=(1, 1, 1))
     with pytest.raises(ValueError, match="channel"):

@@ -134,6 +134,7 @@ impl Frame {
         }
         f.spacing = spacing;
         f.source = FrameSource::Given;
+        f.unit = given_unit(&self.unit).to_string();
         f
     }
 
@@ -199,6 +200,20 @@ fn diagonal(s: [f64; 3]) -> Affine {
     ]
 }
 
+/// The length unit of sizes given with `--spacing` on an input without a
+/// physical size: they are no longer pixels, and no unit is known.
+pub const NEUTRAL_UNIT: &str = "unit";
+
+/// The unit of sizes given for an input whose unit was `unit`: the file's
+/// own when it has one, else [`NEUTRAL_UNIT`].
+pub fn given_unit(unit: &str) -> &str {
+    if unit == "px" {
+        NEUTRAL_UNIT
+    } else {
+        unit
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -229,5 +244,8 @@ mod tests {
         let g = f.respaced([1.0, 1.0, 1.0]);
         assert_eq!(g.domain_to_world([3.5, 4.5, 1.5]), [7.0, 1.0, 8.0]);
         assert_eq!(g.source, FrameSource::Given);
+        assert_eq!(g.unit, "mm");
+        let unitless = Frame::image_rows_up(6, 4, [1.0, 1.0], "px").respaced([0.5, 0.5, 1.0]);
+        assert_eq!(unitless.unit, NEUTRAL_UNIT);
     }
 }

@@ -137,6 +137,7 @@ impl Volume {
         }
         self.spacing = spacing;
         self.source = FrameSource::Given;
+        self.unit = crate::io::frame::given_unit(&self.unit).to_string();
         self
     }
 

@@ -1,8 +1,15 @@
 //! What a finished segmentation measures, in the input's physical units:
-//! per phase its pixel/voxel count, area/volume, mean and standard deviation
+//! per phase its pixel/voxel count, area/volume (three estimates, below), mean and standard deviation
 //! of the intensity (in the file's units when known) and number of connected
 //! pieces; per pair of phases the interface length (2D) or area (3D); and the
 //! triple junctions (2D: how many) or junction curves (3D: their length).
+//!
+//! Three area/volume estimates per phase: the partial-volume estimate
+//! ([`partial_volume`](super::partial_volume), the one to use: band pixels
+//! count by the fraction their intensity implies, so a blurred edge is
+//! measured where its intensity integral puts it, whichever side the
+//! segmentation drew it on), the count of labelled pixels/voxels times the
+//! pixel/voxel size, and the mesh's.
 //!
 //! Counts, areas/volumes, intensities and pieces come from the label image
 //! (each pixel/voxel counted once); the mesh area/volume of each phase (the
@@ -17,6 +24,7 @@ use crate::complex::{Complex, Label, VertexKind};
 use crate::dim::{D2, D3};
 use crate::io::intensity::IntensityMap;
 use crate::io::Frame;
+use crate::segment::partial_volume::partial_volume;
 use serde::Serialize;
 use std::fmt::Write as _;
 
@@ -27,9 +35,14 @@ pub struct PhaseRow {
     pub phase: usize,
     /// Pixels/voxels labelled with it.
     pub count: usize,
+    /// Partial-volume area (2D) or volume (3D) in the frame's unit
+    /// squared/cubed (see [`partial_volume`](super::partial_volume)).
+    pub partial_volume: f64,
+    /// Standard error of [`PhaseRow::partial_volume`] due to the noise.
+    pub partial_volume_se: f64,
     /// Area (2D) or volume (3D) in the frame's unit squared/cubed: the
     /// pixels/voxels labelled with it times the pixel area/voxel volume.
-    pub measure: f64,
+    pub count_measure: f64,
     /// Area (2D) or volume (3D) of the phase's mesh cells in the frame's
     /// unit (exact; `None` until [`Measurements::with_mesh_2d`] or
     /// [`with_mesh_3d`](Measurements::with_mesh_3d) adds it).
@@ -103,11 +116,15 @@ impl Measurements {
             }
         }
         let components = count_components(labels, frame.dims, phases);
+        let pv = partial_volume(labels, values, frame.dims, phases);
+        let voxel = frame.voxel_measure();
         let rows = (0..phases)
             .map(|p| PhaseRow {
                 phase: p,
                 count: count[p],
-                measure: count[p] as f64 * frame.voxel_measure(),
+                partial_volume: pv.measure[p] * voxel,
+                partial_volume_se: pv.standard_error[p] * voxel,
+                count_measure: count[p] as f64 * voxel,
                 mesh_measure: None,
                 mean: mean[p].map(|m| map.original(m)),
                 std: mean[p].map(|_| map.scale.abs() * (sq[p] / count[p] as f64).sqrt()),
@@ -197,16 +214,20 @@ impl Measurements {
     pub fn phases_csv(&self, dimension: usize) -> String {
         let measure = if dimension == 2 { "area" } else { "volume" };
         let unit = format!("{}{dimension}", self.unit);
-        let mut out =
-            format!("phase,count,{measure}_{unit},mesh_{measure}_{unit},mean,std,components\n");
+        let mut out = format!(
+            "phase,count,pv_{measure}_{unit},pv_{measure}_se_{unit},count_{measure}_{unit},\
+             mesh_{measure}_{unit},mean,std,components\n"
+        );
         let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v}"));
         for r in &self.phases {
             let _ = writeln!(
                 out,
-                "{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{}",
                 r.phase,
                 r.count,
-                r.measure,
+                r.partial_volume,
+                r.partial_volume_se,
+                r.count_measure,
                 opt(r.mesh_measure),
                 opt(r.mean),
                 opt(r.std),
@@ -316,16 +337,22 @@ mod tests {
         let m =
             Measurements::from_labels(&labels, &values, Some(IntensityMap::unsigned(8)), &frame, 2);
         assert_eq!(m.phases[1].count, 8);
-        assert_eq!(m.phases[1].measure, 8.0);
+        assert_eq!(m.phases[1].count_measure, 8.0);
+        // Sharp edges: the partial-volume estimate is the count.
+        assert_eq!(m.phases[1].partial_volume, 8.0);
         assert_eq!(m.phases[1].components, 2);
         assert_eq!(m.phases[0].components, 1);
         assert!((m.phases[1].mean.unwrap() - 204.0).abs() < 1e-4);
         assert!(m.phases[1].std.unwrap() < 1e-4);
         let csv = m.phases_csv(2);
         assert!(
-            csv.starts_with("phase,count,area_mm2,mesh_area_mm2,mean,std,components\n0,16,16,,")
+            csv.starts_with(
+                "phase,count,pv_area_mm2,pv_area_se_mm2,count_area_mm2,mesh_area_mm2,mean,std,\
+                 components\n0,16,16,0,16,,"
+            ),
+            "{csv}"
         );
-        assert!(csv.contains("\n1,8,8,,204.0000"), "{csv}");
+        assert!(csv.contains("\n1,8,8,0,8,,204.0000"), "{csv}");
     }
 
     #[test]

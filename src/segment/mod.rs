@@ -48,6 +48,7 @@ pub mod measurements;
 pub mod model;
 pub mod models;
 pub mod params;
+pub mod partial_volume;
 pub mod raster;
 pub mod relaxed_length;
 pub mod reseed;
