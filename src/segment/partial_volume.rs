@@ -65,7 +65,7 @@ pub fn partial_volume(
     dims: [usize; 3],
     phases: usize,
 ) -> PartialVolume {
-    if phases > MAX_PHASES || phases < 2 {
+    if !(2..=MAX_PHASES).contains(&phases) {
         return counted(labels, phases);
     }
     let (band, depth) = band_and_depth(labels, dims);
