@@ -10,7 +10,7 @@ which is where the model puts a blurred edge.
 usage (from the repository root, after `cargo build --release` and
 `pip install -r benches/compare/requirements.txt`):
 
-  python3 benches/phase_measures.py --out OUT [--sizes 256 512] [--sizes3d 64]
+  python3 benches/phase_measures.py --out OUT [--sizes 256 512] [--sizes3d 64 128] [--seed 1]
 """
 from __future__ import annotations
 
@@ -74,7 +74,7 @@ def model_volume(image):
     return int((image > t).sum())
 
 
-def two_d(out, sizes, sigmas):
+def two_d(out, sizes, sigmas, seed):
     print("| image | phase | truth px | partial volume (± s.e.) | labels | mesh |")
     print("|---|---|---|---|---|---|")
     for name, phases in (("two_phase", 2), ("four_phase", 4)):
@@ -82,7 +82,7 @@ def two_d(out, sizes, sigmas):
             for s in sigmas:
                 tag = f"{name}_{n}_s{s:.2f}"
                 data = os.path.join(out, tag)
-                run("phantom", name, "--size", n, "--noise", s, "--out", data)
+                run("phantom", name, "--size", n, "--noise", s, "--seed", seed, "--out", data)
                 res = os.path.join(out, tag + "_out")
                 run("segment", os.path.join(data, name + ".png"), "--phases", phases,
                     "--quiet", "--outputs", "labels,phases", "--out", res)
@@ -93,7 +93,7 @@ def two_d(out, sizes, sigmas):
                           f"| {pct(area, count)} | {pct(mesh, count)} |")
 
 
-def three_d(out, sizes, sigmas):
+def three_d(out, sizes, sigmas, seed):
     print("| volume | truth voxels | analytic | partial volume (± s.e.) | labels | mesh "
           "| model (noise-free) |")
     print("|---|---|---|---|---|---|---|")
@@ -105,7 +105,7 @@ def three_d(out, sizes, sigmas):
             for s in sigmas:
                 tag = f"{name}_{n}_s{s:.2f}"
                 data = os.path.join(out, tag)
-                run("phantom3d", name, "--size", n, "--noise", s, "--out", data)
+                run("phantom3d", name, "--size", n, "--noise", s, "--seed", seed, "--out", data)
                 res = os.path.join(out, tag + "_out")
                 run("segment3d", os.path.join(data, name + ".tif"), "--quiet",
                     "--outputs", "labels,phases", "--out", res)
@@ -121,14 +121,15 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True)
     ap.add_argument("--sizes", type=int, nargs="*", default=[256, 512])
-    ap.add_argument("--sizes3d", type=int, nargs="*", default=[64])
+    ap.add_argument("--sizes3d", type=int, nargs="*", default=[64, 128])
     ap.add_argument("--sigmas", type=float, nargs="*", default=[0.1, 0.2])
+    ap.add_argument("--seed", type=int, default=1, help="noise seed of the phantoms")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     if a.sizes:
-        two_d(a.out, a.sizes, a.sigmas)
+        two_d(a.out, a.sizes, a.sigmas, a.seed)
     if a.sizes3d:
-        three_d(a.out, a.sizes3d, a.sigmas)
+        three_d(a.out, a.sizes3d, a.sigmas, a.seed)
 
 
 if __name__ == "__main__":
