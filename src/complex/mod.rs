@@ -15,6 +15,7 @@ mod export;
 mod interface;
 mod junction;
 mod measure;
+mod seen;
 #[cfg(feature = "tetgen")]
 pub mod surface;
 mod validate;
@@ -183,6 +184,8 @@ impl<K: Dim> Complex<K> {
             return;
         };
         out.push(start);
+        let mut seen = seen::SeenCells::new();
+        seen.insert(start);
         let mut next = 0;
         while next < out.len() {
             let c = out[next];
@@ -193,7 +196,8 @@ impl<K: Dim> Complex<K> {
                     continue;
                 }
                 if let Some(nb) = *nb {
-                    if !holds(out, nb) {
+                    if !seen.contains(nb, out) {
+                        seen.insert(nb);
                         out.push(nb);
                     }
                 }
@@ -477,15 +481,6 @@ impl<K: Dim> Complex<K> {
     pub fn last_cell_map(&self) -> &[Option<CellId>] {
         &self.book.last_cell_map
     }
-}
-
-/// Whether `ids` holds `x`, scanning all of it without an early exit so that
-/// the compiler vectorises the loop: `star_into` asks this for every facet of
-/// every cell of a star (3D stars hold 20–30 tets), and the branchy
-/// `contains` made it the hottest function of a 3D run.
-#[inline]
-fn holds(ids: &[CellId], x: CellId) -> bool {
-    ids.iter().fold(false, |found, &y| found | (y == x))
 }
 
 #[cfg(test)]

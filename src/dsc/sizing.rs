@@ -17,14 +17,14 @@ use crate::dim::Point;
 
 /// The target edge length over the domain: uniform (the average edge length
 /// `L` of the parameters) or graded on a grid.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct SizingField {
     grid: Option<SizeGrid>,
 }
 
 /// Samples of a graded field: one value per grid cell of side `spacing`,
 /// x fastest, then y, then z (one layer in 2D).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 struct SizeGrid {
     origin: [f64; 3],
     spacing: f64,
@@ -239,30 +239,64 @@ impl SizeGrid {
         self.spacing * (sq as f64).sqrt()
     }
 
+    /// The chamfer sweeps of [`SizingField::limit_gradation`], on a copy
+    /// padded with one layer of `+∞` on every side of each axis swept, so
+    /// that every neighbour is a fixed index offset and no bounds are
+    /// checked (a neighbour in the padding lowers nothing: the result is
+    /// that of sweeping the grid alone).
     fn limit_gradation(&mut self, rate: f64) {
         let offsets = forward_offsets(self.three_d());
         let steps: Vec<f64> = offsets
             .iter()
             .map(|o| rate * self.offset_length(o))
             .collect();
-        let [nx, ny, _] = self.dims;
-        let n = self.values.len();
-        // Forward: each sample from its earlier neighbours.
-        for i in 0..n {
-            let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
-            for (o, &s) in offsets.iter().zip(&steps) {
-                if let Some(j) = self.offset(x, y, z, *o) {
-                    self.values[i] = self.values[i].min(self.values[j] + s);
-                }
+        let [nx, ny, nz] = self.dims;
+        // The axes the offsets step along: x and y, and z in 3D.
+        let oz = usize::from(self.three_d());
+        let (px, py, pz) = (nx + 2, ny + 2, nz + 2 * oz);
+        let (ox, oy) = (1, 1);
+        let mut padded = vec![f64::INFINITY; px * py * pz];
+        let at = |x: usize, y: usize, z: usize| (x + ox) + px * ((y + oy) + py * (z + oz));
+        for z in 0..nz {
+            for y in 0..ny {
+                let row = nx * (y + ny * z);
+                let start = at(0, y, z);
+                padded[start..start + nx].copy_from_slice(&self.values[row..row + nx]);
             }
         }
-        // Backward: each sample from its later neighbours (the mirrored offsets).
-        for i in (0..n).rev() {
-            let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
-            for (o, &s) in offsets.iter().zip(&steps) {
-                if let Some(j) = self.offset(x, y, z, [-o[0], -o[1], -o[2]]) {
-                    self.values[i] = self.values[i].min(self.values[j] + s);
+        let deltas: Vec<isize> = offsets
+            .iter()
+            .map(|o| o[0] + px as isize * (o[1] + py as isize * o[2]))
+            .collect();
+        let cells: Vec<usize> = (0..nz)
+            .flat_map(|z| (0..ny).map(move |y| (y, z)))
+            .map(|(y, z)| at(0, y, z))
+            .collect();
+        // Forward: each sample from its earlier neighbours, rows in order.
+        for &start in &cells {
+            for i in start..start + nx {
+                let mut v = padded[i];
+                for (&d, &s) in deltas.iter().zip(&steps) {
+                    v = v.min(padded[i.wrapping_add_signed(d)] + s);
                 }
+                padded[i] = v;
+            }
+        }
+        // Backward: each sample from its later neighbours (mirrored offsets).
+        for &start in cells.iter().rev() {
+            for i in (start..start + nx).rev() {
+                let mut v = padded[i];
+                for (&d, &s) in deltas.iter().zip(&steps) {
+                    v = v.min(padded[i.wrapping_add_signed(-d)] + s);
+                }
+                padded[i] = v;
+            }
+        }
+        for z in 0..nz {
+            for y in 0..ny {
+                let row = nx * (y + ny * z);
+                let start = at(0, y, z);
+                self.values[row..row + nx].copy_from_slice(&padded[start..start + nx]);
             }
         }
     }
@@ -303,6 +337,59 @@ mod tests {
         let diag = f.at(&Vector3::new(10.0, 10.0, 10.0), 0.0);
         assert!((diag - (1.0 + 2.0 * 3f64.sqrt())).abs() < 1e-12);
         assert!(f.gradation_excess(1.0) < 1e-12);
+    }
+
+    /// The sweeps as first written, testing every neighbour against the
+    /// grid's bounds.
+    fn reference_sweeps(g: &mut SizeGrid, rate: f64) {
+        let offsets = forward_offsets(g.three_d());
+        let [nx, ny, _] = g.dims;
+        let n = g.values.len();
+        let order: Vec<usize> = (0..n).chain((0..n).rev()).collect();
+        for (pass, &i) in order.iter().enumerate() {
+            let sign = if pass < n { 1 } else { -1 };
+            let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
+            for o in &offsets {
+                let o = [sign * o[0], sign * o[1], sign * o[2]];
+                if let Some(j) = g.offset(x, y, z, o) {
+                    g.values[i] = g.values[i].min(g.values[j] + rate * g.offset_length(&o));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn padded_sweeps_give_the_bounds_checked_result_bit_for_bit() {
+        let mut state = 12345u64;
+        let mut random = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let boxes: [(&[f64], usize); 5] = [
+            (&[13.0, 7.0], 2),
+            (&[1.0, 9.0], 2),
+            (&[9.0, 6.0, 5.0], 3),
+            (&[1.0, 8.0, 7.0], 3),
+            (&[6.0, 5.0, 1.0], 3),
+        ];
+        for (hi, n) in boxes {
+            let mut f = SizingField::constant(&[0.0; 3][..n], hi, n, 1.0, 20.0);
+            let g = f.grid.as_mut().unwrap();
+            for v in &mut g.values {
+                *v = 1.0 + 19.0 * random();
+            }
+            let mut expected = g.clone();
+            reference_sweeps(&mut expected, 0.7);
+            f.limit_gradation(0.7);
+            assert_eq!(
+                f.grid.as_ref().unwrap().values,
+                expected.values,
+                "box {hi:?}"
+            );
+            assert!(f.gradation_excess(0.7) < 1e-12);
+        }
     }
 
     #[test]

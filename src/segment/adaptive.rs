@@ -168,6 +168,9 @@ pub struct AdaptiveSizing {
     requests: SizingField,
     /// The field of the last update.
     field: SizingField,
+    /// The field of the last update before its gradation was limited: when
+    /// an update lowers the same samples, the limited field is the last one.
+    unlimited: SizingField,
     /// Cells that asked for refinement in the last update.
     pub last_requests: usize,
     /// The estimated noise variance of the last update.
@@ -186,6 +189,7 @@ impl AdaptiveSizing {
             gradation: params.gradation,
             residual_sigmas: params.residual_sigmas,
             field: requests.clone(),
+            unlimited: SizingField::uniform(),
             requests,
             last_requests: 0,
             noise_variance: 0.0,
@@ -249,8 +253,11 @@ impl AdaptiveSizing {
             }
         }
         field.lower_to(&self.requests);
-        field.limit_gradation(self.gradation);
-        self.field = field;
+        if field != self.unlimited {
+            self.unlimited = field.clone();
+            field.limit_gradation(self.gradation);
+            self.field = field;
+        }
         &self.field
     }
 
