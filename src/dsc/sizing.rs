@@ -168,6 +168,20 @@ impl SizingField {
     }
 }
 
+/// Lowers each sample of the row of `padded` starting at `start` (copied
+/// into `row`) to its neighbour at each of `across` (index offset times
+/// `sign`, in another row) plus that neighbour's step.
+fn sweep_row(padded: &[f64], row: &mut [f64], start: usize, across: &[(isize, f64)], sign: isize) {
+    let n = row.len();
+    row.copy_from_slice(&padded[start..start + n]);
+    for &(delta, step) in across {
+        let from = start.wrapping_add_signed(sign * delta);
+        for (v, &w) in row.iter_mut().zip(&padded[from..from + n]) {
+            *v = v.min(w + step);
+        }
+    }
+}
+
 /// The neighbour offsets of a forward sweep (those earlier in x-fastest
 /// order): 4 in 2D (of the 8-neighbourhood), 13 in 3D (of the 26).
 fn forward_offsets(three_d: bool) -> Vec<[isize; 3]> {
@@ -264,33 +278,44 @@ impl SizeGrid {
                 padded[start..start + nx].copy_from_slice(&self.values[row..row + nx]);
             }
         }
-        let deltas: Vec<isize> = offsets
-            .iter()
-            .map(|o| o[0] + px as isize * (o[1] + py as isize * o[2]))
-            .collect();
-        let cells: Vec<usize> = (0..nz)
+        // The neighbour one step back along x is the only one in the same
+        // row: every other is in a row the sweep finished, so the row takes
+        // their minimum element-wise (vectorised), then runs along x. The
+        // result is the minimum of the same values as taking the
+        // neighbours one sample at a time (min is exact and commutative).
+        let mut along = 0.0;
+        let mut across: Vec<(isize, f64)> = Vec::new();
+        for (o, &s) in offsets.iter().zip(&steps) {
+            if o[1] == 0 && o[2] == 0 {
+                along = s;
+            } else {
+                across.push((o[0] + px as isize * (o[1] + py as isize * o[2]), s));
+            }
+        }
+        let rows: Vec<usize> = (0..nz)
             .flat_map(|z| (0..ny).map(move |y| (y, z)))
             .map(|(y, z)| at(0, y, z))
             .collect();
+        let mut row = vec![0.0; nx];
         // Forward: each sample from its earlier neighbours, rows in order.
-        for &start in &cells {
-            for i in start..start + nx {
-                let mut v = padded[i];
-                for (&d, &s) in deltas.iter().zip(&steps) {
-                    v = v.min(padded[i.wrapping_add_signed(d)] + s);
-                }
-                padded[i] = v;
+        for &start in &rows {
+            sweep_row(&padded, &mut row, start, &across, 1);
+            let mut last = f64::INFINITY;
+            for v in row.iter_mut() {
+                *v = v.min(last + along);
+                last = *v;
             }
+            padded[start..start + nx].copy_from_slice(&row);
         }
         // Backward: each sample from its later neighbours (mirrored offsets).
-        for &start in cells.iter().rev() {
-            for i in (start..start + nx).rev() {
-                let mut v = padded[i];
-                for (&d, &s) in deltas.iter().zip(&steps) {
-                    v = v.min(padded[i.wrapping_add_signed(-d)] + s);
-                }
-                padded[i] = v;
+        for &start in rows.iter().rev() {
+            sweep_row(&padded, &mut row, start, &across, -1);
+            let mut last = f64::INFINITY;
+            for v in row.iter_mut().rev() {
+                *v = v.min(last + along);
+                last = *v;
             }
+            padded[start..start + nx].copy_from_slice(&row);
         }
         for z in 0..nz {
             for y in 0..ny {
