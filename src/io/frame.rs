@@ -119,13 +119,19 @@ impl Frame {
     }
 
     /// Replaces the spacing (e.g. from `--spacing`), keeping each world
-    /// axis's direction and the world position of voxel 0.
+    /// axis's direction and the world position of voxel 0 (of a volume) or
+    /// of the image's corner pixel at the world origin (2D: the bottom-left
+    /// pixel of a PNG as `vtkPNGReader` places it, the first of a TIFF).
     pub fn respaced(&self, spacing: [f64; 3]) -> Self {
         let mut f = self.clone();
         for (c, &s) in spacing.iter().enumerate() {
             let ratio = s / self.spacing[c];
             for row in &mut f.index_to_world {
                 row[c] *= ratio;
+            }
+            if self.dims[2] == 1 {
+                // A 2D image's offset is its flip, (h−1)·s_y: it scales too.
+                f.index_to_world[c][3] *= ratio;
             }
         }
         if self.dims[2] > 1 || self.domain_scale != [1.0; 3] {
@@ -245,7 +251,13 @@ mod tests {
         assert_eq!(g.domain_to_world([3.5, 4.5, 1.5]), [7.0, 1.0, 8.0]);
         assert_eq!(g.source, FrameSource::Given);
         assert_eq!(g.unit, "mm");
-        let unitless = Frame::image_rows_up(6, 4, [1.0, 1.0], "px").respaced([0.5, 0.5, 1.0]);
+        let unitless = Frame::image_rows_up(6, 4, [1.0, 1.0], "px").respaced([0.5, 0.25, 1.0]);
         assert_eq!(unitless.unit, NEUTRAL_UNIT);
+        // As the same image read with that spacing: the bottom row at y = 0.
+        assert_eq!(unitless, {
+            let mut f = Frame::image_rows_up(6, 4, [0.5, 0.25], NEUTRAL_UNIT);
+            f.source = FrameSource::Given;
+            f
+        });
     }
 }

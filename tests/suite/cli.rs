@@ -785,6 +785,11 @@ fn pixel_size_from_spacing_and_tiff_resolution_reaches_the_outputs() {
         serde_json::json!([0.5, 0.25, 1.0])
     );
     assert_eq!(report["frame"]["source"], "given");
+    // A PNG's bottom row stays at y = 0, as vtkPNGReader would place it with
+    // that spacing; the given sizes have no unit, so the neutral one.
+    assert_eq!(report["frame"]["index_to_world"][1][3], 29.0 * 0.25);
+    assert_eq!(report["frame"]["unit"], "unit");
+    assert!(csv.starts_with("phase,count,pv_area_unit2,"), "{csv}");
     assert!(
         !out.join("labels.tif").exists(),
         "a PNG input gives labels.png only"
