@@ -25,7 +25,9 @@ fn main() {
                 for adaptive in [false, true] {
                     let view = ImageView::new_2d(size, size, &ph.image).expect("image");
                     let mut params = SegmentParams::new(ph.phases);
-                    params.sizing.adaptive = adaptive;
+                    if adaptive {
+                        params.use_adaptive_mesh();
+                    }
                     let t = Instant::now();
                     let mut seg = Segmentation::<D2>::new(view, params).expect("segmentation");
                     let report = seg.run(|_| {});

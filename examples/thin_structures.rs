@@ -27,7 +27,9 @@ fn main() {
             for adaptive in [false, true] {
                 let view = ImageView::new_2d(size, size, &ph.image).expect("image");
                 let mut params = SegmentParams::new(2);
-                params.sizing.adaptive = adaptive;
+                if adaptive {
+                    params.use_adaptive_mesh();
+                }
                 if let Some(w) = length_weight {
                     params.length_weight = w;
                 }

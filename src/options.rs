@@ -76,8 +76,9 @@ impl EvolutionArgs {
         set(&mut p.step_fraction, self.step_fraction);
         set(&mut p.length_weight, self.length_weight);
         p.flip_interval = self.flip_interval.unwrap_or(p.flip_interval);
-        p.sizing.adaptive |=
-            self.adaptive || self.min_edge_length.is_some() || self.max_edge_length.is_some();
+        if self.adaptive || self.min_edge_length.is_some() || self.max_edge_length.is_some() {
+            p.use_adaptive_mesh();
+        }
         p.sizing.min_edge_length = self.min_edge_length.or(p.sizing.min_edge_length);
         p.sizing.max_edge_length = self.max_edge_length.or(p.sizing.max_edge_length);
         p.sizing.coarse_start |= self.coarse_start;

@@ -25,6 +25,17 @@
 //! homogeneous regions are few. The run starts from the uniform mesh at `L`
 //! and coarsens, or (`coarse_start`) from a mesh at `h_max` and refines
 //! around the interfaces and the unexplained detail (coarse to fine).
+//!
+//! In 2D the field settles ([`SizingParams::settle`]): once the energy has
+//! not reached a new low for a few iterations and no new detail was found
+//! away from the interfaces, cells at interfaces stop asking for
+//! refinement. Along blurred edges between phases whose means are not
+//! adjacent, such cells kept asking, were refined, fitted, were coarsened
+//! and asked again: a field that changes every iteration keeps the mesh
+//! splitting and collapsing cells and the labels flipping, so the stopping
+//! rule never fired. Settled, the interfaces keep `L` and the requests away
+//! from them stand (and may still grow where new detail is found), and the
+//! energy-plateau rule may stop the run.
 
 use super::integrate::{CellStats, PhaseStats};
 use super::SegmentError;
@@ -54,6 +65,15 @@ pub struct SizingParams {
     /// smaller than them must be found again by refinement.
     #[serde(default)]
     pub coarse_start: bool,
+    /// Cells at interfaces stop asking for refinement once the energy has
+    /// not reached a new low for this many iterations and no new detail was
+    /// found away from the interfaces (`None`: they ask to the end).
+    /// Refinement keeps asking where the blur of an edge leaves a residual,
+    /// and a field that keeps changing keeps the mesh splitting and
+    /// collapsing the same cells: once the energy no longer falls, the
+    /// interfaces' refinement has done its work.
+    #[serde(default)]
+    pub settle: Option<usize>,
 }
 
 impl Default for SizingParams {
@@ -65,6 +85,7 @@ impl Default for SizingParams {
             gradation: 1.0,
             residual_sigmas: 5.0,
             coarse_start: false,
+            settle: None,
         }
     }
 }
@@ -173,8 +194,14 @@ pub struct AdaptiveSizing {
     unlimited: SizingField,
     /// Cells that asked for refinement in the last update.
     pub last_requests: usize,
+    /// Cells away from the interfaces that asked for a finer size than any
+    /// request before at their place, in the last update: detail still
+    /// being found.
+    pub new_requests: usize,
     /// The estimated noise variance of the last update.
     pub noise_variance: f64,
+    /// Whether the field has settled (see [`SizingParams::settle`]).
+    settled: bool,
 }
 
 impl AdaptiveSizing {
@@ -192,13 +219,26 @@ impl AdaptiveSizing {
             unlimited: SizingField::uniform(),
             requests,
             last_requests: 0,
+            new_requests: 0,
             noise_variance: 0.0,
+            settled: false,
         }
     }
 
     /// The resolved sizes.
     pub fn sizes(&self) -> Sizes {
         self.sizes
+    }
+
+    /// Whether the field has settled: cells at interfaces no longer ask
+    /// for refinement.
+    pub fn is_settled(&self) -> bool {
+        self.settled
+    }
+
+    /// Settles the field (see [`SizingParams::settle`]).
+    pub fn settle(&mut self) {
+        self.settled = true;
     }
 
     /// The field for the next deform of `complex`, whose cells have the
@@ -209,12 +249,13 @@ impl AdaptiveSizing {
         cells: &[CellStats],
         phases: &PhaseStats,
     ) -> &SizingField {
+        self.last_requests = 0;
+        self.new_requests = 0;
         self.noise_variance = noise_variance(complex, cells);
         let gap = smallest_gap(phases);
         let smallest_cell = K::regular_measure(self.sizes.h_min).max(1.0);
         let mut field = self.field.clone();
         field.fill(self.sizes.h_max);
-        self.last_requests = 0;
         for c in complex.cell_ids() {
             let pts = complex.cell_points(c);
             let pts = &pts[..K::NV];
@@ -229,6 +270,9 @@ impl AdaptiveSizing {
             let Some(stats) = cells.get(c.index()) else {
                 continue;
             };
+            if self.settled && on_interface {
+                continue;
+            }
             let longest = longest_edge(pts);
             // At a 2D interface, a blurred edge leaves a residual of a
             // fraction of a pixel's width along the cell: ask for more than
@@ -247,6 +291,9 @@ impl AdaptiveSizing {
                     // Where the interface is, for now: it may be moving.
                     field.lower(&centroid, target);
                 } else {
+                    if target < self.requests.at(&centroid, self.sizes.h_max) {
+                        self.new_requests += 1;
+                    }
                     self.requests.lower(&centroid, target);
                 }
                 self.last_requests += 1;

@@ -764,10 +764,24 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// Whether the stopping rule is met.
     pub fn converged(&self) -> bool {
         self.quiet_iterations >= self.params.converge_iterations
-            || self
+            || (self
                 .params
                 .converge_plateau
                 .is_some_and(|n| self.since_new_low >= n)
+                && self.sizing_settled())
+    }
+
+    /// Whether the sizing field has settled, as far as the plateau rule is
+    /// concerned: always for the uniform mesh and for adaptive runs without
+    /// [`settle`](super::adaptive::SizingParams::settle) (3D); otherwise once
+    /// it settled, so that a run still finding thin detail (each find
+    /// lowers the energy by little) goes on.
+    fn sizing_settled(&self) -> bool {
+        self.params.sizing.settle.is_none()
+            || self
+                .adaptive
+                .as_ref()
+                .is_none_or(AdaptiveSizing::is_settled)
     }
 
     /// Iterates until the built-in stopping rule ([`converged`](Self::converged))
@@ -858,6 +872,16 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// current interfaces and statistics.
     fn update_sizing(&mut self) {
         if let Some(adaptive) = &mut self.adaptive {
+            // Settled: the energy stalls and no new detail was found.
+            if adaptive.new_requests == 0
+                && self
+                    .params
+                    .sizing
+                    .settle
+                    .is_some_and(|n| self.since_new_low >= n)
+            {
+                adaptive.settle();
+            }
             let field = adaptive.update(&self.complex, &self.cells, &self.phases);
             self.deform_workspace.set_sizing(field.clone());
         }

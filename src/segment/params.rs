@@ -7,6 +7,15 @@ use serde::{Deserialize, Serialize};
 /// Largest number of phases.
 pub const MAX_PHASES: usize = 64;
 
+/// The energy-plateau rule of adaptive runs: converged once the energy has
+/// not reached a new low for this many iterations.
+pub const PLATEAU_ITERATIONS: usize = 10;
+
+/// The 2D sizing field freezes once the energy has not reached a new low
+/// for this many iterations (half the plateau: the last iterations polish
+/// the interfaces on a fixed mesh size).
+pub const SETTLE_ITERATIONS: usize = 5;
+
 /// Which region force drives interface points between two phases.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -217,8 +226,23 @@ impl SegmentParams {
             converge_plateau: None,
             length_weight: if phases == 2 { 0.3 } else { 0.4 },
             sample_spacing: 1.0,
-            sizing: SizingParams::default(),
+            sizing: SizingParams {
+                settle: Some(SETTLE_ITERATIONS),
+                ..SizingParams::default()
+            },
         }
+    }
+
+    /// Turns on adaptive resolution with the stopping rules it needs: the
+    /// energy-plateau rule ([`converge_plateau`](Self::converge_plateau), 10
+    /// unless set), as in 3D. In 2D the sizing field also settles
+    /// ([`SizingParams::settle`]): without both, refinement at blurred
+    /// four-phase edges kept the mesh splitting and collapsing cells and the
+    /// runs reached the iteration cap (`benches/RESULTS.md`, "Adaptive
+    /// resolution").
+    pub fn use_adaptive_mesh(&mut self) {
+        self.sizing.adaptive = true;
+        self.converge_plateau.get_or_insert(PLATEAU_ITERATIONS);
     }
 
     /// The defaults for a volume (3D) with `phases` phases: as [`new`](Self::new)
@@ -239,7 +263,7 @@ impl SegmentParams {
             length_weight: 0.1,
             flip_interval: 20,
             flip_once: true,
-            converge_plateau: Some(10),
+            converge_plateau: Some(PLATEAU_ITERATIONS),
             sizing: SizingParams {
                 adaptive: true,
                 coarse_start: true,

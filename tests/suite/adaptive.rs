@@ -20,7 +20,7 @@ fn run<K: Raster>(
 }
 
 fn adaptive(mut params: SegmentParams, coarse_start: bool) -> SegmentParams {
-    params.sizing.adaptive = true;
+    params.use_adaptive_mesh();
     params.sizing.coarse_start = coarse_start;
     params
 }
@@ -48,6 +48,44 @@ fn adaptive_2d_mesh_matches_the_uniform_dice_with_far_fewer_cells() {
     assert!(shortest < sizes.interface && longest > 1.5 * sizes.interface);
     assert!(median > 0.0 && last.cells == graded.cells);
     assert!(uniform.sizes.is_none() && uniform.history[0].edge_lengths.is_none());
+}
+
+/// Four phases at σ 0.1: refinement at the blurred edges between
+/// non-adjacent means kept the mesh splitting and collapsing cells, and the
+/// run reached the iteration cap; the settling field and the plateau rule
+/// stop it sooner than the uniform run, at about its Dice.
+#[test]
+fn adaptive_2d_four_phase_run_settles_and_converges() {
+    let ph = Phantom2Kind::FourPhase.generate(256, 0.1, 1);
+    let view = || ImageView::new_2d(ph.width, ph.height, &ph.image).unwrap();
+    let run4 = |params: SegmentParams| {
+        let mut seg = Segmentation::<D2>::new(view(), params).unwrap();
+        let report = seg.run(|_| {});
+        assert_valid(seg.complex());
+        (report, mean_dice(&seg.label_image(), &ph.truth, 4))
+    };
+    let (uniform, uniform_dice) = run4(SegmentParams::new(4));
+    let (graded, graded_dice) = run4(adaptive(SegmentParams::new(4), false));
+    assert!(graded.converged, "{} iterations", graded.iterations);
+    assert!(
+        graded.iterations <= uniform.iterations,
+        "{} iterations adaptive, {} uniform",
+        graded.iterations,
+        uniform.iterations
+    );
+    assert!(
+        graded_dice >= uniform_dice - 0.003 && graded.cells < uniform.cells,
+        "Dice {graded_dice} adaptive, {uniform_dice} uniform; {} cells adaptive, {} uniform",
+        graded.cells,
+        uniform.cells
+    );
+    // Settled: the last iterations hardly remesh.
+    let tail = &graded.history[graded.history.len() - 5..];
+    assert!(
+        tail.windows(2)
+            .all(|w| w[0].cells.abs_diff(w[1].cells) * 100 <= w[0].cells),
+        "{tail:?}"
+    );
 }
 
 #[test]
