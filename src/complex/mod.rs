@@ -179,16 +179,29 @@ impl<K: Dim> Complex<K> {
 
     /// The breadth-first walk of [`star_into`](Self::star_into).
     fn star_by_search(&self, v: VertexId, out: &mut Vec<CellId>) {
+        self.star_search_until(v, out, |_| false);
+    }
+
+    /// The breadth-first walk of [`star_into`](Self::star_into), stopped at
+    /// the first cell collected for which `found` holds (returned; `out`
+    /// then holds the cells collected so far).
+    fn star_search_until(
+        &self,
+        v: VertexId,
+        out: &mut Vec<CellId>,
+        found: impl Fn(CellId) -> bool,
+    ) -> Option<CellId> {
         out.clear();
-        let Some(start) = self.vertex_cell[v.index()] else {
-            return;
-        };
+        let start = self.vertex_cell[v.index()]?;
         out.push(start);
         let mut seen = seen::SeenCells::new();
         seen.insert(start);
         let mut next = 0;
         while next < out.len() {
             let c = out[next];
+            if found(c) {
+                return Some(c);
+            }
             next += 1;
             let verts = self.cell(c);
             for (i, nb) in self.neighbours(c).iter().enumerate() {
@@ -203,6 +216,7 @@ impl<K: Dim> Complex<K> {
                 }
             }
         }
+        None
     }
 
     /// The 2D star is a fan: every cell has two edges through `v`, so the
@@ -280,7 +294,11 @@ impl<K: Dim> Complex<K> {
         }
     }
 
-    /// Collects the live cells containing both `u` and `v` into `out`.
+    /// Collects the live cells containing both `u` and `v` into `out`: in
+    /// 2D from the fan of `u`; in 3D by searching the star of `u` only until
+    /// a cell of the edge turns up, then turning around the edge from cell
+    /// to cell across the facets that hold it (the ring of a 3D edge holds
+    /// 4–7 tets, the star of a vertex 20–30).
     pub fn cells_of_edge(
         &self,
         u: VertexId,
@@ -288,9 +306,45 @@ impl<K: Dim> Complex<K> {
         star: &mut Vec<CellId>,
         out: &mut Vec<CellId>,
     ) {
-        self.star_into(u, star);
         out.clear();
-        out.extend(star.iter().copied().filter(|&c| self.cell(c).contains(&v)));
+        if K::STAR_IS_FAN {
+            self.star_into(u, star);
+            out.extend(star.iter().copied().filter(|&c| self.cell(c).contains(&v)));
+            return;
+        }
+        if let Some(first) = self.star_search_until(u, star, |c| self.cell(c).contains(&v)) {
+            self.turn_around_edge(u, v, first, out);
+        }
+    }
+
+    /// The cells around the edge `uv` from `first` (which holds it), in
+    /// turning order: one way round until the ring closes, or, where it
+    /// meets the domain boundary, both ways from `first`.
+    fn turn_around_edge(&self, u: VertexId, v: VertexId, first: CellId, out: &mut Vec<CellId>) {
+        out.push(first);
+        // The facets of a cell that hold the edge are those opposite its
+        // two other corners.
+        let exits = |c: CellId| {
+            let verts = self.cell(c);
+            let mut facing = (0..verts.len()).filter(|&i| verts[i] != u && verts[i] != v);
+            let nbs = self.neighbours(c);
+            let a = facing.next().and_then(|i| nbs[i]);
+            let b = facing.next().and_then(|i| nbs[i]);
+            (a, b)
+        };
+        let (ahead, behind) = exits(first);
+        for start in [ahead, behind] {
+            let (mut from, mut at) = (first, start);
+            while let Some(c) = at {
+                if c == first || out.len() > self.live_cells {
+                    return;
+                }
+                out.push(c);
+                let (a, b) = exits(c);
+                let step = if a == Some(from) { b } else { a };
+                (from, at) = (c, step);
+            }
+        }
     }
 
     /// Sets the label of one cell and reclassifies its vertices.

@@ -8,6 +8,11 @@ use crate::ops::{edge_settled, CollapseMode, ImproveMemo, SmoothScratch};
 use serde::Serialize;
 use smallvec::SmallVec;
 
+/// A 3D region whose seeds number at least a this-th of the cells is
+/// collected by one pass over the cells: a 3D star holds 20–30 cells, so its
+/// stars would visit every cell of the mesh several times over.
+const SEEDS_FOR_A_SCAN: usize = 8;
+
 /// The dimension-specific connectivity improvement (2D edge flips, 3D flips).
 pub trait Connectivity: Dim {
     /// Improves the connectivity of the cells of `region` (flips, at most a
@@ -279,7 +284,8 @@ impl<K: Connectivity> Complex<K> {
         self.region_cells_with(seeds, out, marks, &mut Vec::new());
     }
 
-    /// [`region_cells`](Self::region_cells) with a scratch star.
+    /// [`region_cells`](Self::region_cells) with a scratch star. In 3D a
+    /// region of many seeds comes in cell id order rather than star by star.
     fn region_cells_with(
         &self,
         seeds: &[VertexId],
@@ -289,6 +295,20 @@ impl<K: Connectivity> Complex<K> {
     ) {
         out.clear();
         marks.clear();
+        if K::N == 3 && seeds.len() * SEEDS_FOR_A_SCAN >= self.cell_count() {
+            // Many seeds (the interface of a folded volume is most of its
+            // mesh): one pass over the cells in id order, each taken if a
+            // corner is a seed, instead of a search of every seed's star.
+            marks.resize(self.vertex_capacity(), false);
+            for &v in seeds {
+                marks[v.index()] = self.is_vertex_alive(v);
+            }
+            out.extend(
+                self.cell_ids()
+                    .filter(|&c| self.cell(c).iter().any(|w| marks[w.index()])),
+            );
+            return;
+        }
         marks.resize(self.cell_capacity(), false);
         for &v in seeds {
             if !self.is_vertex_alive(v) {
