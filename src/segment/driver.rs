@@ -369,26 +369,29 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         Ok(s)
     }
 
-    /// ν = `length_weight` × Δ × R: Δ the smallest gap between the known
-    /// means (the robust range over N if fewer than two are known), R the
-    /// robust range ([`IntensityStats::scale`]). Both scale with the
-    /// intensities, so ν is in intensity² per pixel like the data term per
-    /// pixel, and `a·I + b` gives the same labels as `I`.
+    /// ν = `length_weight` × Δ² / 2: Δ the contrast between adjacent phases,
+    /// the spread of the known means over the gaps between them (the robust
+    /// range over N if fewer than two are known). A stripe d pixels wide at
+    /// contrast Δ lowers the data term by d·Δ² per pixel of its length and
+    /// costs 2ν in boundary, so it pays for itself when d > `length_weight`
+    /// (a disk when its radius does): the weight is a width in pixels, and ν
+    /// is in intensity² per pixel like the data term, so `a·I + b` gives the
+    /// same labels as `I`, and the noise level does not enter. The mean gap
+    /// rather than the smallest: a phase that starts as a split of noise
+    /// close to another must not make every boundary free.
     fn length_weight(&self) -> f64 {
-        let mut m: Vec<f64> = self.phases.mean.iter().flatten().copied().collect();
-        m.sort_by(f64::total_cmp);
-        let gap = m
-            .windows(2)
-            .map(|w| w[1] - w[0])
-            .filter(|&g| g > 0.0)
-            .fold(f64::INFINITY, f64::min);
-        let scale = self.intensity.scale();
-        let gap = if gap.is_finite() {
-            gap
+        let known: Vec<f64> = self.phases.mean.iter().flatten().copied().collect();
+        let (lo, hi) = known
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &m| {
+                (lo.min(m), hi.max(m))
+            });
+        let contrast = if known.len() >= 2 && hi > lo {
+            (hi - lo) / (known.len() - 1) as f64
         } else {
-            scale / self.params.phases as f64
+            self.intensity.scale() / self.params.phases as f64
         };
-        self.params.length_weight * gap * scale
+        self.params.length_weight * contrast * contrast / 2.0
     }
 
     /// The complex in its current state.

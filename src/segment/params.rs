@@ -185,15 +185,20 @@ pub struct SegmentParams {
     #[serde(default)]
     pub converge_plateau: Option<usize>,
     /// Weight `w` of the length (3D: area) term of the Mumford–Shah energy,
-    /// dimensionless: `ν = w·Δ·R`, with Δ the smallest gap between the initial
-    /// phase means and R the robust intensity range (see
-    /// [`IntensityStats::scale`](super::intensity::IntensityStats::scale)), so
-    /// ν is in intensity² per pixel of length like the data term per pixel and
-    /// `a·I + b` gives the labels of `I`. ν is reported, and used by the flip
-    /// guard. Default 0.3 for two phases, 0.4 for more (with more phases the
+    /// a width in pixels (3D: voxels): `ν = w·Δ²/2`, with Δ the smallest gap
+    /// between the initial phase means. A stripe `d` pixels wide whose
+    /// intensity differs by Δ from its surroundings lowers the data term by
+    /// `d·Δ²` per pixel of its length and costs `2ν = w·Δ²` in boundary, so
+    /// structures narrower than `w` pixels (disks of smaller radius) at that
+    /// contrast are not worth their boundary, and wider ones are; at a
+    /// contrast `k·Δ` the limit is `w/k²`. ν is in intensity² per pixel of
+    /// length like the data term per pixel, so `a·I + b` gives the labels of
+    /// `I`, and it does not grow with the noise. ν is reported, and used by
+    /// the flip guard. Default 1.6 for two phases (lower leaves the crossings
+    /// of Fig. 2 unresolved), 5.5 for more (with more phases the
     /// pixel-dominant flip rule grows bands of intermediate phases along
-    /// blurred edges, which 0.4 removes); 0.1 in 3D ([`new_3d`](Self::new_3d)).
-    /// Evidence: `docs/parameters.md`.
+    /// blurred edges, which only 4–6 removes); in 3D 0.6 and 1.2
+    /// ([`new_3d`](Self::new_3d)). Evidence: `docs/parameters.md`.
     pub length_weight: f64,
     /// Spacing of the samples along interface facets, in pixels.
     pub sample_spacing: f64,
@@ -224,7 +229,7 @@ impl SegmentParams {
             converge_displacement: 0.02,
             converge_iterations: 5,
             converge_plateau: None,
-            length_weight: if phases == 2 { 0.3 } else { 0.4 },
+            length_weight: if phases == 2 { 1.6 } else { 5.5 },
             sample_spacing: 1.0,
             sizing: SizingParams {
                 settle: Some(SETTLE_ITERATIONS),
@@ -246,9 +251,9 @@ impl SegmentParams {
     }
 
     /// The defaults for a volume (3D) with `phases` phases: as [`new`](Self::new)
-    /// but `length_weight` 0.1 (the length term is an area, and thin
-    /// structures have more area per voxel than 2D shapes have length per
-    /// pixel), `flip_interval` 20 as the 3D reference code (with flips every
+    /// but `length_weight` 0.6 for two phases and 1.2 for more (the length
+    /// term is an area, and thin structures have more area per voxel than 2D
+    /// shapes have length per pixel), `flip_interval` 20 as the 3D reference code (with flips every
     /// iteration a few cells flip every iteration and the stopping rule never
     /// fires) and `flip_once` on (under strong noise each flip round
     /// relabelled interface voxels that the rigidity then smoothed back),
@@ -260,7 +265,7 @@ impl SegmentParams {
     /// Evidence: `docs/parameters.md`.
     pub fn new_3d(phases: usize) -> Self {
         SegmentParams {
-            length_weight: 0.1,
+            length_weight: if phases == 2 { 0.6 } else { 1.2 },
             flip_interval: 20,
             flip_once: true,
             converge_plateau: Some(PLATEAU_ITERATIONS),
