@@ -68,7 +68,7 @@ pub fn partial_volume(
     if !(2..=MAX_PHASES).contains(&phases) {
         return counted(labels, phases);
     }
-    let (band, depth) = band_and_depth(labels, dims);
+    let (band, depth) = band_and_depth(labels, dims, phases);
     let plateaus = plateaus(labels, values, &depth, phases);
     let mut measure = vec![0.0f64; phases];
     let mut variance = vec![0.0f64; phases];
@@ -134,16 +134,19 @@ struct Plateau {
     variance: f64,
 }
 
-/// Per pixel, the set of labels (one bit each) within [`BAND_HALF_WIDTH`]
-/// of it, and its depth: the distance (Chebyshev, in pixels) to the nearest
-/// other label, capped at [`PLATEAU_DEPTH`].
-fn band_and_depth(labels: &[u8], dims: [usize; 3]) -> (Vec<u16>, Vec<u8>) {
-    let mut sets: Vec<u16> = labels.iter().map(|&l| 1u16 << l).collect();
+/// Per pixel, the set of labels (one bit each; labels from `phases` up have
+/// none) within [`BAND_HALF_WIDTH`] of it, and its depth: how many pixels lie
+/// between it and the nearest other label (Chebyshev distance − 1), capped at
+/// [`PLATEAU_DEPTH`] (no other label within that distance).
+fn band_and_depth(labels: &[u8], dims: [usize; 3], phases: usize) -> (Vec<u16>, Vec<u8>) {
+    let mut sets: Vec<u16> = labels
+        .iter()
+        .map(|&l| if usize::from(l) < phases { 1 << l } else { 0 })
+        .collect();
     let mut depth = vec![PLATEAU_DEPTH; labels.len()];
-    let mut scratch = vec![0u16; labels.len()];
     let mut band = Vec::new();
     for reach in 1..=PLATEAU_DEPTH {
-        grow_by_one(&mut sets, &mut scratch, dims);
+        grow_by_one(&mut sets, dims);
         for (d, s) in depth.iter_mut().zip(&sets) {
             if *d == PLATEAU_DEPTH && s.count_ones() > 1 {
                 *d = reach - 1;
@@ -156,25 +159,45 @@ fn band_and_depth(labels: &[u8], dims: [usize; 3]) -> (Vec<u16>, Vec<u8>) {
     (band, depth)
 }
 
-/// Replaces each pixel's label set by the union over its 3×3(×3) window
-/// (one axis at a time; axes of length 1 are skipped).
-fn grow_by_one(sets: &mut [u16], scratch: &mut [u16], dims: [usize; 3]) {
-    let strides = [1, dims[0], dims[0] * dims[1]];
-    for axis in 0..3 {
-        let (n, stride) = (dims[axis], strides[axis]);
-        if n < 2 {
-            continue;
+/// Replaces each pixel's label set by the union over its 3×3(×3) window,
+/// one axis at a time, in place (a copy of one line or slice at a time).
+fn grow_by_one(sets: &mut [u16], dims: [usize; 3]) {
+    let [nx, ny, _] = dims;
+    for row in sets.chunks_exact_mut(nx) {
+        let mut before = 0;
+        for i in 0..nx {
+            let own = row[i];
+            let after = row.get(i + 1).copied().unwrap_or(0);
+            row[i] = own | before | after;
+            before = own;
         }
-        scratch.copy_from_slice(sets);
-        for (i, s) in sets.iter_mut().enumerate() {
-            let at = (i / stride) % n;
-            if at > 0 {
-                *s |= scratch[i - stride];
-            }
-            if at + 1 < n {
-                *s |= scratch[i + stride];
-            }
+    }
+    // Along y within each z slice (lines of nx), then along z (slices of nx·ny).
+    for (line, lines) in [(nx, ny), (nx * ny, sets.len() / (nx * ny))] {
+        for block in sets.chunks_exact_mut(line * lines) {
+            grow_lines(block, line);
         }
+    }
+}
+
+/// ORs each `line`-long line of `block` with its two neighbouring lines'
+/// original values.
+fn grow_lines(block: &mut [u16], line: usize) {
+    let lines = block.len() / line;
+    if lines < 2 {
+        return;
+    }
+    let mut before = vec![0u16; line];
+    let mut own = vec![0u16; line];
+    for k in 0..lines {
+        let (head, tail) = block.split_at_mut((k + 1) * line);
+        let current = &mut head[k * line..];
+        own.copy_from_slice(current);
+        let after = tail.get(..line);
+        for (i, c) in current.iter_mut().enumerate() {
+            *c |= before[i] | after.map_or(0, |a| a[i]);
+        }
+        std::mem::swap(&mut before, &mut own);
     }
 }
 
@@ -219,11 +242,57 @@ mod tests {
     fn depth_counts_pixels_to_the_other_label() {
         // A 12-pixel row: 0 0 0 0 0 0 | 1 1 1 1 1 1.
         let labels: Vec<u8> = (0..12).map(|i| u8::from(i >= 6)).collect();
-        let (band, depth) = band_and_depth(&labels, [12, 1, 1]);
+        let (band, depth) = band_and_depth(&labels, [12, 1, 1], 2);
         assert_eq!(depth, vec![5, 4, 3, 2, 1, 0, 0, 1, 2, 3, 4, 5]);
         let mixed: Vec<bool> = band.iter().map(|s| s.count_ones() == 2).collect();
         let expect: Vec<bool> = (0..12).map(|i| (3..9).contains(&i)).collect();
         assert_eq!(mixed, expect);
+    }
+
+    #[test]
+    fn label_sets_and_depths_match_a_direct_window_search() {
+        // Pseudo-random labels 0..3 (and an out-of-range 7) in a 9×7×6 volume.
+        let dims = [9usize, 7, 6];
+        let n = dims.iter().product::<usize>();
+        let mut state = 12345u32;
+        let labels: Vec<u8> = (0..n)
+            .map(|_| {
+                state = state.wrapping_mul(1_103_515_245).wrapping_add(12345);
+                match (state >> 16) % 23 {
+                    0 => 7,
+                    r if r < 3 => 1 + (r as u8 % 2),
+                    _ => 0,
+                }
+            })
+            .collect();
+        let (band, depth) = band_and_depth(&labels, dims, 3);
+        let at = |x: usize, y: usize, z: usize| labels[x + dims[0] * (y + dims[1] * z)];
+        let window = |x: usize, y: usize, z: usize, r: usize| {
+            let mut set = 0u16;
+            for zz in z.saturating_sub(r)..(z + r + 1).min(dims[2]) {
+                for yy in y.saturating_sub(r)..(y + r + 1).min(dims[1]) {
+                    for xx in x.saturating_sub(r)..(x + r + 1).min(dims[0]) {
+                        let l = at(xx, yy, zz);
+                        if l < 3 {
+                            set |= 1 << l;
+                        }
+                    }
+                }
+            }
+            set
+        };
+        for z in 0..dims[2] {
+            for y in 0..dims[1] {
+                for x in 0..dims[0] {
+                    let i = x + dims[0] * (y + dims[1] * z);
+                    assert_eq!(band[i], window(x, y, z, BAND_HALF_WIDTH as usize));
+                    let expect = (1..=PLATEAU_DEPTH as usize)
+                        .find(|&r| window(x, y, z, r).count_ones() > 1)
+                        .map_or(PLATEAU_DEPTH, |r| r as u8 - 1);
+                    assert_eq!(depth[i], expect, "({x}, {y}, {z})");
+                }
+            }
+        }
     }
 
     #[test]
