@@ -27,8 +27,10 @@
 //!   where the two plateaus coincide, the pixel counts whole for its label.
 //!
 //! The standard error reported with each estimate is the noise's share:
-//! `sqrt(Σ σ² / (μ_a − μ_b)²)` over the band pixels the phase takes part in,
-//! with `σ²` the mean of the two plateaus' intensity variances.
+//! `Σ σ² / (μ_a − μ_b)²` over the band pixels the phase takes part in (`σ²`
+//! the mean of the two plateaus' intensity variances), plus the plateau
+//! means' sampling error carried through the fractions, square-rooted. It
+//! does not cover how the segmentation itself moves with the noise.
 //!
 //! Distances are counted in pixels/voxels (as the blur is), whatever their
 //! physical size; the result is in pixels/voxels, scaled by the caller.
@@ -38,9 +40,10 @@ pub const BAND_HALF_WIDTH: u8 = 3;
 /// Depth (pixels/voxels from any other label) of the pixels that estimate a
 /// phase's plateau intensity when the phase is thick enough.
 pub const PLATEAU_DEPTH: u8 = BAND_HALF_WIDTH + 3;
-/// Pixels a plateau layer must hold before a deeper one is preferred over a
-/// shallower one.
-pub const PLATEAU_SAMPLES: usize = 1000;
+/// Pixels a plateau is taken over when the phase has them: its layers are
+/// added deepest first until they hold this many (the mean of 4000 noisy
+/// pixels is within about σ/63 of the plateau).
+pub const PLATEAU_SAMPLES: usize = 4000;
 /// Phases the per-pixel label sets can hold (one bit each); with more, every
 /// pixel counts for its label.
 const MAX_PHASES: usize = 16;
@@ -72,6 +75,8 @@ pub fn partial_volume(
     let plateaus = plateaus(labels, values, &depth, phases);
     let mut measure = vec![0.0f64; phases];
     let mut variance = vec![0.0f64; phases];
+    // slope[a * phases + p]: how phase a's estimate moves with plateau p.
+    let mut slope = vec![0.0f64; phases * phases];
     for ((&label, &value), &set) in labels.iter().zip(values).zip(&band) {
         let own = label as usize;
         if own >= phases {
@@ -87,8 +92,21 @@ pub fn partial_volume(
                 let noise = 0.5 * (pa.variance + pb.variance) / (contrast * contrast);
                 variance[a] += noise;
                 variance[b] += noise;
+                // ∂f/∂μ_a = −f/Δ, ∂f/∂μ_b = (f − 1)/Δ; phase b's share moves oppositely.
+                slope[a * phases + a] -= f / contrast;
+                slope[a * phases + b] += (f - 1.0) / contrast;
+                slope[b * phases + a] += f / contrast;
+                slope[b * phases + b] -= (f - 1.0) / contrast;
             }
             None => measure[own] += 1.0,
+        }
+    }
+    // The plateaus' own sampling error adds to the band's noise.
+    for (a, v) in variance.iter_mut().enumerate() {
+        for (p, plateau) in plateaus.iter().enumerate() {
+            if let Some(q) = plateau {
+                *v += slope[a * phases + p].powi(2) * q.variance / q.samples as f64;
+            }
         }
     }
     PartialVolume {
@@ -132,6 +150,8 @@ fn mixed_pair(set: u16, plateaus: &[Option<Plateau>]) -> Option<(usize, usize)> 
 struct Plateau {
     mean: f64,
     variance: f64,
+    /// Pixels the mean was taken over.
+    samples: usize,
 }
 
 /// Per pixel, the set of labels (one bit each; labels from `phases` up have
@@ -228,6 +248,7 @@ fn plateaus(labels: &[u8], values: &[f32], depth: &[u8], phases: usize) -> Vec<O
                 Plateau {
                     mean,
                     variance: (sq / n as f64 - mean * mean).max(0.0),
+                    samples: n,
                 }
             })
         })
