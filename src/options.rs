@@ -140,7 +140,8 @@ pub struct SegmentOptions {
     /// Largest number of phases tried by --phases auto.
     #[arg(long, default_value_t = crate::segment::auto::DEFAULT_MAX_PHASES)]
     pub max_phases: usize,
-    /// Average edge length L of the mesh in pixels [default: min(W,H)/64·sqrt(N-1) clamped to 3..10].
+    /// Average edge length L of the mesh in pixels [default: min(W,H)/64·sqrt(N-1) clamped to 3..10,
+    /// shortened down to 4 on an image whose noise is below a fifth of the gap between its phase means].
     #[arg(long, allow_hyphen_values = true)]
     pub edge_length: Option<f64>,
     /// Initialisation [default: disks when --disk is given, else histogram].

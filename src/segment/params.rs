@@ -121,7 +121,8 @@ pub struct SegmentParams {
     #[serde(default)]
     pub auto_phases: Option<usize>,
     /// Average edge length `L` of the DSC in pixels. `None` picks
-    /// [`default_edge_length`] from the image size.
+    /// [`default_edge_length`] from the image size, in 2D shortened by
+    /// [`contrast_edge_length`] on an image with little noise.
     pub edge_length: Option<f64>,
     /// Iteration cap.
     pub max_iterations: usize,
@@ -565,9 +566,56 @@ pub fn default_edge_length(width: usize, height: usize, phases: usize) -> f64 {
         .max(1.0)
 }
 
+/// Noise-to-contrast ratio `σ̂/Δ` (noise over the smallest gap between the
+/// phase means) that [`default_edge_length`] is made for: the noisiest
+/// images it must average over; on the least noisy benchmark phantom the
+/// ratio is 0.26.
+pub const NOISE_TO_CONTRAST_OF_SIZE_DEFAULT: f64 = 0.2;
+
+/// Smallest edge length [`contrast_edge_length`] gives, in pixels: the size
+/// default of a 256² two-phase image (the cost grows as 1/L²).
+pub const SMALLEST_CONTRAST_EDGE_LENGTH: f64 = 4.0;
+
+/// The 2D default edge length for an image whose noise `noise` (σ̂) is
+/// `noise/gap` of the smallest gap between its phase means: the size default
+/// `size_default` ([`default_edge_length`]) where the noise is at least
+/// [`NOISE_TO_CONTRAST_OF_SIZE_DEFAULT`] of the gap, and proportionally
+/// shorter edges where it is less, down to [`SMALLEST_CONTRAST_EDGE_LENGTH`].
+///
+/// The size default makes cells large enough that their mean intensities
+/// separate the phases under the noise of the benchmark phantoms. A cell of
+/// edge L averages ≈ 0.43·L² pixels, so its mean's error is ≈ σ̂/(0.66·L):
+/// relative to the gap it is the same at `L·Δ/σ̂` constant. A photograph whose
+/// noise is a few percent of the phase gap needs no large cells, and on one
+/// its fine structure is lost at the size default (e.g. the piecewise-constant
+/// fit of a 512² photograph at 4 phases is 1.5× that of a pixel-based method
+/// at L = 10 px, 1.07× at L = 4).
+pub fn contrast_edge_length(size_default: f64, noise: f64, gap: f64) -> f64 {
+    if !(gap > 0.0 && noise.is_finite()) {
+        return size_default;
+    }
+    let ratio = noise / gap;
+    let scaled = size_default * (ratio / NOISE_TO_CONTRAST_OF_SIZE_DEFAULT).min(1.0);
+    scaled.max(SMALLEST_CONTRAST_EDGE_LENGTH.min(size_default))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn contrast_edge_length_shrinks_only_for_images_with_little_noise() {
+        // as noisy as the benchmark phantoms: the size default
+        assert_eq!(contrast_edge_length(8.0, 0.1, 0.4), 8.0);
+        assert_eq!(contrast_edge_length(8.0, 0.2, 0.2), 8.0);
+        // a tenth of the gap: half the size default
+        assert!((contrast_edge_length(10.0, 0.02, 0.2) - 5.0).abs() < 1e-9);
+        // nearly noise-free: the floor, never above the size default
+        assert_eq!(contrast_edge_length(10.0, 0.0, 0.2), 4.0);
+        assert_eq!(contrast_edge_length(3.0, 0.0, 0.2), 3.0);
+        // no gap known: the size default
+        assert_eq!(contrast_edge_length(8.0, 0.01, 0.0), 8.0);
+    }
 
     #[test]
     fn default_edge_length_follows_the_smallest_extent() {

@@ -52,6 +52,21 @@ pub fn split_histogram(hist: &Histogram, n: usize) -> Classes {
     classes_from_starts(hist, &starts)
 }
 
+/// The smallest gap between the means of the least-variance split of `hist`
+/// into `n ≥ 2` classes; `None` when fewer than two classes hold samples.
+pub fn smallest_class_gap(hist: &Histogram, n: usize) -> Option<f64> {
+    let means: Vec<f64> = split_histogram(hist, n)
+        .means
+        .into_iter()
+        .flatten()
+        .collect();
+    means
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|&g| g > 0.0)
+        .reduce(f64::min)
+}
+
 /// Prefix sums over the bins: `(count, sum, sum_sq)` of bins `0..b` at `b`.
 struct Prefix {
     c: Vec<f64>,
