@@ -13,7 +13,7 @@
 use dsc_seg::io::{Image2, Volume};
 use dsc_seg::phantom::shapes2d::{four_phase, two_phase};
 use dsc_seg::phantom::shapes3d::{hollow_sphere_labels, torus_labels};
-use dsc_seg::phantom::{Phantom3, RenderOptions, TWO_PHASE_LEVELS};
+use dsc_seg::phantom::{Phantom2, Phantom3, RenderOptions, TWO_PHASE_LEVELS};
 use dsc_seg::pipeline::{segment_image, segment_volume, Provenance};
 use dsc_seg::segment::measurements::PhaseRow;
 use dsc_seg::segment::SegmentParams;
@@ -43,9 +43,17 @@ fn phase_one_volumes(ph: &Phantom3) -> (f64, f64) {
     (row.count_measure, row.mesh_measure.unwrap())
 }
 
-/// Voxels of phase 1 in `truth`.
-fn truth_count(truth: &[u8]) -> f64 {
-    truth.iter().filter(|&&l| l == 1).count() as f64
+/// Pixels/voxels of `phase` in `truth`.
+fn truth_count(truth: &[u8], phase: usize) -> f64 {
+    truth.iter().filter(|&&l| usize::from(l) == phase).count() as f64
+}
+
+/// Segments a 2D phantom into `phases` with the defaults: its phase rows.
+fn phase_rows_2d(ph: &Phantom2, phases: usize) -> Vec<PhaseRow> {
+    let image = Image2::from_raw(ph.width, ph.height, ph.image.clone());
+    let params = SegmentParams::new(phases);
+    let seg = segment_image(&image, params, Provenance::array(), true).unwrap();
+    seg.measurements.phases
 }
 
 fn within(a: f64, b: f64, tolerance: f64) -> bool {
@@ -55,14 +63,8 @@ fn within(a: f64, b: f64, tolerance: f64) -> bool {
 #[test]
 fn phase_areas_match_the_four_phase_phantom_within_one_percent() {
     let ph = four_phase(512, 0.1, 1);
-    let image = Image2::from_raw(ph.width, ph.height, ph.image.clone());
-    let seg = segment_image(&image, SegmentParams::new(4), Provenance::array(), true).unwrap();
-    for row in &seg.measurements.phases {
-        let truth = ph
-            .truth
-            .iter()
-            .filter(|&&l| usize::from(l) == row.phase)
-            .count() as f64;
+    for row in &phase_rows_2d(&ph, 4) {
+        let truth = truth_count(&ph.truth, row.phase);
         let mesh = row.mesh_measure.unwrap();
         eprintln!(
             "phase {}: labels {}, mesh {mesh:.1}, truth {truth} px",
@@ -93,14 +95,8 @@ fn partial_volume_areas_match_a_noisy_blurred_phantom_within_one_percent() {
     // σ 0.2 on a 256² image: the labels misplace pixels along the edges
     // (the count is off by about 1 %); the partial-volume estimate is not.
     let ph = two_phase(256, 0.2, 1);
-    let image = Image2::from_raw(ph.width, ph.height, ph.image.clone());
-    let seg = segment_image(&image, SegmentParams::new(2), Provenance::array(), true).unwrap();
-    for row in &seg.measurements.phases {
-        let truth = ph
-            .truth
-            .iter()
-            .filter(|&&l| usize::from(l) == row.phase)
-            .count() as f64;
+    for row in &phase_rows_2d(&ph, 2) {
+        let truth = truth_count(&ph.truth, row.phase);
         eprintln!(
             "phase {}: partial volume {:.1} ± {:.1}, labels {}, truth {truth} px",
             row.phase, row.partial_volume, row.partial_volume_se, row.count
@@ -132,7 +128,7 @@ fn phase_volumes_match_sharp_edged_phantoms_within_two_percent() {
         ),
     ];
     for (name, truth, analytic) in cases {
-        let count = truth.iter().filter(|&&l| l == 1).count() as f64;
+        let count = truth_count(&truth, 1);
         let (labels, mesh) = phase_one_volumes(&render(truth, 0.1, 0.0));
         eprintln!(
             "{name}: labels {labels}, mesh {mesh:.1}, truth {count}, analytic {analytic:.1} voxels"
@@ -175,7 +171,7 @@ fn two_phase_model_volume(image: &[f32]) -> usize {
 #[test]
 fn on_blurred_edges_the_volume_is_the_models_optimum() {
     let truth = torus_labels(N);
-    let count = truth.iter().filter(|&&l| l == 1).count() as f64;
+    let count = truth_count(&truth, 1);
     let model = two_phase_model_volume(&render(truth.clone(), 0.0, 1.5).image) as f64;
     let row = phase_one(&render(truth, 0.1, 1.5));
     let (labels, mesh) = (row.count_measure, row.mesh_measure.unwrap());
@@ -203,7 +199,7 @@ fn partial_volume_matches_a_noisy_blurred_shell_within_two_percent() {
     // partial volume; the shell's centre, where its plateau is read, is
     // still slightly darkened by the blur).
     let truth = hollow_sphere_labels(N);
-    let count = truth_count(&truth);
+    let count = truth_count(&truth, 1);
     let row = phase_one(&render(truth, 0.1, 1.5));
     let pv = row.partial_volume;
     eprintln!(
