@@ -21,56 +21,52 @@ fn run(args: &[&str], labels: &str, out: &Path, threads: &str) -> (Vec<u8>, Vec<
     )
 }
 
-fn segment(out: &Path, threads: &str) -> (Vec<u8>, Vec<u8>) {
-    let args = [
-        "segment",
-        "--phantom",
-        "four_phase",
-        "--phantom-size",
-        "128",
-        "--max-iterations",
-        "60",
-    ];
-    run(&args, "labels.png", out, threads)
-}
-
-/// The 3D default (adaptive, coarse start) on the four-phase volume, whose
-/// junction curves and graded mesh exercise every parallel section.
-fn segment3d(out: &Path, threads: &str) -> (Vec<u8>, Vec<u8>) {
-    let args = [
-        "segment3d",
-        "--phantom",
-        "four_phase",
-        "--phantom-size",
-        "40",
-        "--phantom-noise",
-        "0.2",
-        "--phases",
-        "4",
-        "--max-iterations",
-        "25",
-    ];
-    run(&args, "labels.tif", out, threads)
+/// Runs `args` on 1 thread, on 2 threads and on 2 threads again: the labels
+/// file `labels` and `mesh.vtu` must be the same bytes every time.
+fn assert_bit_identical(args: &[&str], labels: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let one = run(args, labels, &dir.path().join("one"), "1");
+    let two = run(args, labels, &dir.path().join("two"), "2");
+    let again = run(args, labels, &dir.path().join("again"), "2");
+    assert!(one.0 == two.0, "{labels} differs between 1 and 2 threads");
+    assert!(one.1 == two.1, "mesh.vtu differs between 1 and 2 threads");
+    assert!(two == again, "outputs differ between two identical runs");
 }
 
 #[test]
 fn outputs_are_bit_identical_across_runs_and_thread_counts() {
-    let dir = tempfile::tempdir().unwrap();
-    let one = segment(&dir.path().join("one"), "1");
-    let two = segment(&dir.path().join("two"), "2");
-    let again = segment(&dir.path().join("again"), "2");
-    assert!(one.0 == two.0, "labels.png differs between 1 and 2 threads");
-    assert!(one.1 == two.1, "mesh.vtu differs between 1 and 2 threads");
-    assert!(two == again, "outputs differ between two identical runs");
+    assert_bit_identical(
+        &[
+            "segment",
+            "--phantom",
+            "four_phase",
+            "--phantom-size",
+            "128",
+            "--max-iterations",
+            "60",
+        ],
+        "labels.png",
+    );
 }
 
+/// The 3D default (adaptive, coarse start) on the four-phase volume, whose
+/// junction curves and graded mesh exercise every parallel section.
 #[test]
 fn volume_outputs_are_bit_identical_across_runs_and_thread_counts() {
-    let dir = tempfile::tempdir().unwrap();
-    let one = segment3d(&dir.path().join("one"), "1");
-    let two = segment3d(&dir.path().join("two"), "2");
-    let again = segment3d(&dir.path().join("again"), "2");
-    assert!(one.0 == two.0, "labels.tif differs between 1 and 2 threads");
-    assert!(one.1 == two.1, "mesh.vtu differs between 1 and 2 threads");
-    assert!(two == again, "outputs differ between two identical runs");
+    assert_bit_identical(
+        &[
+            "segment3d",
+            "--phantom",
+            "four_phase",
+            "--phantom-size",
+            "40",
+            "--phantom-noise",
+            "0.2",
+            "--phases",
+            "4",
+            "--max-iterations",
+            "25",
+        ],
+        "labels.tif",
+    );
 }
