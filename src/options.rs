@@ -41,7 +41,7 @@ pub struct EvolutionArgs {
     /// Weight w of the length (3D: area) term of the Mumford–Shah energy, a
     /// width in pixels (3D: voxels): a structure narrower than w pixels (a
     /// disk of smaller radius) whose intensity differs from its surroundings
-    /// by Δ, the smallest gap between the initial phase means, costs more in
+    /// by Δ, the mean gap between adjacent initial phase means, costs more in
     /// boundary than it gains in fit and is removed; one k times that contrast
     /// is kept down to w/k² pixels. One pixel of boundary costs w·Δ²/2 of
     /// data energy, so scaling or shifting the intensities changes nothing,

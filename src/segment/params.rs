@@ -186,8 +186,10 @@ pub struct SegmentParams {
     #[serde(default)]
     pub converge_plateau: Option<usize>,
     /// Weight `w` of the length (3D: area) term of the Mumford–Shah energy,
-    /// a width in pixels (3D: voxels): `ν = w·Δ²/2`, with Δ the smallest gap
-    /// between the initial phase means. A stripe `d` pixels wide whose
+    /// a width in pixels (3D: voxels): `ν = w·Δ²/2`, with Δ the mean gap
+    /// between adjacent initial phase means (the spread of the means over the
+    /// number of gaps: a phase split out of noise close to another does not
+    /// make every boundary nearly free). A stripe `d` pixels wide whose
     /// intensity differs by Δ from its surroundings lowers the data term by
     /// `d·Δ²` per pixel of its length and costs `2ν = w·Δ²` in boundary, so
     /// structures narrower than `w` pixels (disks of smaller radius) at that
