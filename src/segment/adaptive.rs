@@ -19,6 +19,8 @@
 //!   exceed a whole pixel layer across the cell (a blurred edge leaves less), so an
 //!   interface that cannot fit the data at size `L` (a thin line once
 //!   labelled, a sharp corner) is refined for as long as it does not fit;
+//! - in 2D, to `h_min` at every pinch, where one phase's cells touch at a
+//!   vertex only (a thin line narrowed to a point), for the iteration;
 //!
 //! then limited in gradation. Everything else coarsens towards `h_max`
 //! (interior collapses in `resize`), so cells far from every interface in
@@ -39,7 +41,7 @@
 
 use super::integrate::{CellStats, PhaseStats};
 use super::SegmentError;
-use crate::complex::{CellId, Complex};
+use crate::complex::{CellId, Complex, VertexKind};
 use crate::dim::{Dim, Point};
 use crate::dsc::SizingField;
 use serde::{Deserialize, Serialize};
@@ -299,6 +301,9 @@ impl AdaptiveSizing {
                 self.last_requests += 1;
             }
         }
+        if K::N == 2 {
+            self.last_requests += refine_pinches(complex, &mut field, self.sizes.h_min);
+        }
         field.lower_to(&self.requests);
         if field != self.unlimited {
             self.unlimited = field.clone();
@@ -338,6 +343,30 @@ impl AdaptiveSizing {
         // σ²·√(2n); a mislabelled smallest cell costs gap²·its pixels.
         excess > self.residual_sigmas * var * (2.0 * n).sqrt() && excess > gap * gap * floor
     }
+}
+
+/// Lowers `field` to `h_min` at every pinch of a 2D complex: a vertex
+/// where a phase occurs in more than one piece of the star (two cells of
+/// one phase touching only at the vertex, as where a thin line narrows to a
+/// point between two cells of the other phase that each hold a part of it).
+/// Such a crossing gets no force and the cells around it are too large for
+/// their pixels to decide the topology; smallest cells there let the label
+/// flips join the two pieces or separate them, as the data says. Returns
+/// the number of pinches.
+fn refine_pinches<K: Dim>(complex: &Complex<K>, field: &mut SizingField, h_min: f64) -> usize {
+    let mut labels = Vec::new();
+    let mut pinches = 0;
+    for v in complex.vertex_ids() {
+        if complex.class(v).kind != VertexKind::Junction {
+            continue;
+        }
+        complex.labels_around(v, &mut labels);
+        if complex.count_phase_pieces(v) > labels.len() {
+            field.lower(&complex.position(v), h_min);
+            pinches += 1;
+        }
+    }
+    pinches
 }
 
 /// The noise variance, estimated as the median over cells of their pixels'

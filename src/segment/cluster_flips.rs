@@ -14,12 +14,14 @@
 //! after the other on the labels as they are then (an ICM sweep over
 //! clusters, which cannot raise the energy).
 //!
-//! Only clusters inside their phase (bordering no cell of another phase)
-//! are considered: they are the structure no interface has reached yet.
-//! Along an interface the motion of the interface does that work, and
-//! between two phases a cluster nearest a third is the band of intermediate
-//! values a blurred edge leaves, which the component flips remove: flipping
-//! it would undo them every other iteration.
+//! A cluster that borders a third phase (neither its own nor the one it
+//! fits) is left alone: between two phases a cluster nearest a third is
+//! the band of intermediate values a blurred edge leaves, which the
+//! component flips remove, and flipping it would undo them every other
+//! iteration. A cluster inside its phase is structure no interface has
+//! reached yet; one that borders the phase it fits is a gap in it (two ends
+//! of a thin line that almost meet), where relabelling it removes the
+//! border it shares with that phase.
 //!
 //! The border of a cluster of small cells is a staircase, up to twice as
 //! long as the interface it becomes once the forces have relaxed it; in 2D
@@ -55,8 +57,9 @@ struct Cluster {
     stats: CellStats,
     /// Interface length (area in 3D) the relabelling adds (negative: removes).
     added_length: f64,
-    /// Whether it borders a cell of another phase than its own.
-    borders_other_phase: bool,
+    /// Whether it borders a cell of a third phase (neither its own nor the
+    /// target).
+    borders_third_phase: bool,
 }
 
 impl ClusterFlipper {
@@ -120,7 +123,7 @@ impl ClusterFlipper {
                 continue;
             }
             let cluster = self.grow(complex, cells, start);
-            if cluster.borders_other_phase {
+            if cluster.borders_third_phase {
                 continue;
             }
             let (Some(m_own), Some(m_target)) =
@@ -190,7 +193,7 @@ impl ClusterFlipper {
             target,
             stats: CellStats::default(),
             added_length: 0.0,
-            borders_other_phase: false,
+            borders_third_phase: false,
         };
         self.members.clear();
         self.border.clear();
@@ -221,11 +224,10 @@ impl ClusterFlipper {
                     }
                 } else if l == own {
                     cluster.added_length += K::facet_measure(&pts[..K::NV], f);
+                } else if l == target {
+                    cluster.added_length -= K::facet_measure(&pts[..K::NV], f);
                 } else {
-                    cluster.borders_other_phase = true;
-                    if l == target {
-                        cluster.added_length -= K::facet_measure(&pts[..K::NV], f);
-                    }
+                    cluster.borders_third_phase = true;
                 }
             }
         }
