@@ -97,6 +97,10 @@ impl Default for SizingParams {
 /// measure of `h`) splits it.
 const REFINE_FACTOR: f64 = 0.3;
 
+/// A cell's mean must deviate from its phase's by this many standard errors
+/// (`σ̂/√n`) to ask for refinement on that ground alone.
+const MEAN_SHIFT_SIGMAS: f64 = 4.0;
+
 /// The smallest target edge length when none is given.
 pub const DEFAULT_MIN_EDGE_LENGTH: f64 = 1.5;
 
@@ -339,9 +343,19 @@ impl AdaptiveSizing {
         };
         let var = self.noise_variance;
         let excess = stats.sse(mean) - n * var;
+        if excess <= gap * gap * floor {
+            return false;
+        }
         // The sum of n squared Gaussian residuals has standard deviation
         // σ²·√(2n); a mislabelled smallest cell costs gap²·its pixels.
-        excess > self.residual_sigmas * var * (2.0 * n).sqrt() && excess > gap * gap * floor
+        if excess > self.residual_sigmas * var * (2.0 * n).sqrt() {
+            return true;
+        }
+        // Part of a thin line shifts the cell's mean long before it raises
+        // the spread of its pixels above that of n residuals: the mean of n
+        // pixels of the phase deviates from its mean by σ/√n.
+        let shift = stats.sum / n - mean;
+        shift * shift * n > MEAN_SHIFT_SIGMAS * MEAN_SHIFT_SIGMAS * var
     }
 }
 

@@ -21,7 +21,8 @@
 //! iteration. A cluster inside its phase is structure no interface has
 //! reached yet; one that borders the phase it fits is a gap in it (two ends
 //! of a thin line that almost meet), where relabelling it removes the
-//! border it shares with that phase.
+//! border it shares with that phase (2D; in 3D only clusters inside their
+//! phase are considered).
 //!
 //! The border of a cluster of small cells is a staircase, up to twice as
 //! long as the interface it becomes once the forces have relaxed it; in 2D
@@ -60,6 +61,8 @@ struct Cluster {
     /// Whether it borders a cell of a third phase (neither its own nor the
     /// target).
     borders_third_phase: bool,
+    /// Whether it borders a cell of the phase it fits.
+    borders_target: bool,
 }
 
 impl ClusterFlipper {
@@ -123,7 +126,9 @@ impl ClusterFlipper {
                 continue;
             }
             let cluster = self.grow(complex, cells, start);
-            if cluster.borders_third_phase {
+            // Gaps are joined in 2D, where the adaptive sizing refines the
+            // pinches that leave them; 3D keeps to clusters inside a phase.
+            if cluster.borders_third_phase || (cluster.borders_target && K::N != 2) {
                 continue;
             }
             let (Some(m_own), Some(m_target)) =
@@ -194,6 +199,7 @@ impl ClusterFlipper {
             stats: CellStats::default(),
             added_length: 0.0,
             borders_third_phase: false,
+            borders_target: false,
         };
         self.members.clear();
         self.border.clear();
@@ -225,6 +231,7 @@ impl ClusterFlipper {
                 } else if l == own {
                     cluster.added_length += K::facet_measure(&pts[..K::NV], f);
                 } else if l == target {
+                    cluster.borders_target = true;
                     cluster.added_length -= K::facet_measure(&pts[..K::NV], f);
                 } else {
                     cluster.borders_third_phase = true;
