@@ -151,3 +151,28 @@ fn adaptive_2d_mesh_keeps_thin_structures_the_uniform_mesh_loses() {
     assert_eq!(found(&graded), 6, "{graded:?}");
     assert!(found(&uniform) < 6, "{uniform:?}");
 }
+
+/// Thin structures at 256² (σ 0.1), where the default mesh is finer
+/// (L = 4): the adaptive mesh keeps the 4-px line and arc whole, the 3-px
+/// line in one piece, and finds the blobs of radius 4 and 5 inside and cut
+/// by the border.
+#[test]
+fn adaptive_2d_mesh_keeps_thin_structures_at_256() {
+    use dsc_seg::phantom::thin::{score, thin};
+    let size = 256;
+    let ph = thin(size, 0.1, 1);
+    let view = ImageView::new_2d(size, size, &ph.image).unwrap();
+    let mut seg = Segmentation::<D2>::new(view, adaptive(SegmentParams::new(2), false)).unwrap();
+    seg.run(|_| {});
+    assert_valid(seg.complex());
+    let scores = score(&seg.label_image(), size, 1);
+    let get = |name: &str| scores.iter().find(|s| s.name == name).unwrap();
+    for name in ["line4", "arc4"] {
+        let s = get(name);
+        assert!(s.recall >= 0.9 && s.components == 1, "{s:?}");
+    }
+    assert_eq!(get("line3").components, 1, "{:?}", get("line3"));
+    for name in ["blob4", "blob5", "border4", "border5"] {
+        assert!(get(name).recall >= 0.5, "{:?}", get(name));
+    }
+}
