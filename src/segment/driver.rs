@@ -628,7 +628,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     }
 
     /// Merges each duplicate phase into its twin and re-seeds every lost
-    /// label by splitting the phase of largest variance (at most `2·N`
+    /// label by splitting the phase with the most structure beyond noise (at most `2·N`
     /// times a run, so data with fewer phases than asked cannot cycle);
     /// returns how many labels were re-seeded. After a re-seed the length
     /// weight is measured again from the new means and the stopping rule
@@ -657,6 +657,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 &self.phases,
                 lost.label(),
                 range,
+                self.intensity.noise,
             ) {
                 self.reseeds += 1;
                 done += 1;

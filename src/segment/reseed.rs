@@ -6,8 +6,8 @@
 //! and 0.5). Either way the result has fewer than `N` distinct phases while
 //! the stopping rule sees nothing wrong. [`lost_phases`] finds them; the driver
 //! then merges a duplicate into its twin and re-seeds the lost label by
-//! splitting the phase with the largest within-phase variance
-//! ([`split_worst_phase`]) at the least-variance threshold of its cell
+//! splitting the phase whose cells' means hold the most structure beyond
+//! noise ([`split_worst_phase`]) at the least-variance threshold of its cell
 //! means, and warns when it cannot.
 
 use super::integrate::{CellStats, PhaseStats};
@@ -112,56 +112,95 @@ pub fn merge_phase<K: Raster>(complex: &mut Complex<K>, from: Label, to: Label) 
     complex.set_labels(&changes);
 }
 
-/// Splits the phase with the largest within-phase sum of squared deviations
-/// in two at the least-variance threshold of its cells' means, and gives the
-/// cells above the threshold the (empty) label `into`. Returns false when no
-/// phase can be split (every phase's cells share one mean).
+/// Splits the phase that holds the most unexplained structure in two at the
+/// least-variance threshold of its cells' means, and gives the cells above
+/// the threshold the (empty) label `into`. Returns false when no phase's
+/// split explains more than noise would (the image holds no further phase).
+///
+/// Which phase: the one whose split lowers the data energy most *beyond what
+/// splitting noise gives*. Cell means scatter by the noise alone (a cell of
+/// `n` pixels by `σ²/n`), so any phase's cells split at a threshold lower the
+/// energy by about `2/π · σ²` per cell even when the phase is one true phase;
+/// a phase that merges two true phases lowers it by up to `n·(gap/2)²` more
+/// per cell. The
+/// largest phase (most often the background) has the largest energy but
+/// mostly noise, and splitting it gives two phases with the same mean, a
+/// duplicate again, while the merged pair stays merged.
 pub fn split_worst_phase<K: Raster>(
     complex: &mut Complex<K>,
     cells: &[CellStats],
     phases: &PhaseStats,
     into: Label,
     (low, high): (f64, f64),
+    noise: f64,
 ) -> bool {
+    let Some((worst, threshold)) =
+        most_structured_split(complex, cells, phases, into, (low, high), noise)
+    else {
+        return false;
+    };
+    let changes: Vec<(CellId, Label)> = complex
+        .cell_ids()
+        .filter(|&c| complex.label(c) as usize == worst)
+        .filter(|&c| cells[c.index()].mean().is_some_and(|m| m >= threshold))
+        .map(|c| (c, into))
+        .collect();
+    if changes.is_empty() {
+        return false;
+    }
+    complex.set_labels(&changes);
+    true
+}
+
+/// What the best two-class split of Gaussian noise lowers its sum of squares
+/// by, as a fraction of it: `2/π` (each class's mean sits `σ·√(2/π)` from the
+/// common mean).
+const NOISE_SPLIT_GAIN: f64 = std::f64::consts::FRAC_2_PI;
+
+/// The phase (other than `into`) whose least-variance split of its cell
+/// means gains most over what splitting noise gains (`2/π · σ²` per cell),
+/// with its threshold; `None` when no split gains more than that.
+fn most_structured_split<K: Raster>(
+    complex: &Complex<K>,
+    cells: &[CellStats],
+    phases: &PhaseStats,
+    into: Label,
+    (low, high): (f64, f64),
+    noise: f64,
+) -> Option<(usize, f64)> {
     let n = phases.count.len();
+    let mut hists: Vec<Histogram> = (0..n).map(|_| Histogram::empty(low, high)).collect();
     let mut sse = vec![0.0; n];
+    let mut cell_count = vec![0usize; n];
     for c in complex.cell_ids() {
         let l = complex.label(c) as usize;
-        if l < n && l != into as usize {
-            if let Some(m) = phases.mean[l] {
-                sse[l] += cells[c.index()].sse(m);
-            }
+        if l >= n || l == into as usize {
+            continue;
+        }
+        let (Some(phase_mean), s) = (phases.mean[l], &cells[c.index()]) else {
+            continue;
+        };
+        if let Some(m) = s.mean() {
+            hists[l].add(m, s.count as f64, s.sum, s.sum_sq);
+            sse[l] += s.sse(phase_mean);
+            cell_count[l] += 1;
         }
     }
-    let mut order: Vec<usize> = (0..n).filter(|&k| sse[k] > 0.0).collect();
-    order.sort_by(|&a, &b| sse[b].total_cmp(&sse[a]));
-    for worst in order {
-        let mut hist = Histogram::empty(low, high);
-        for c in complex.cell_ids() {
-            if complex.label(c) as usize == worst {
-                let s = &cells[c.index()];
-                if let Some(m) = s.mean() {
-                    hist.add(m, s.count as f64, s.sum, s.sum_sq);
-                }
-            }
+    let mut best: Option<(f64, usize, f64)> = None;
+    for (k, hist) in hists.iter().enumerate() {
+        if cell_count[k] < 2 {
+            continue;
         }
-        let classes = split_histogram(&hist, 2);
+        let classes = split_histogram(hist, 2);
         if classes.counts.contains(&0.0) {
             continue;
         }
-        let t = classes.thresholds[0];
-        let changes: Vec<(CellId, Label)> = complex
-            .cell_ids()
-            .filter(|&c| complex.label(c) as usize == worst)
-            .filter(|&c| cells[c.index()].mean().is_some_and(|m| m >= t))
-            .map(|c| (c, into))
-            .collect();
-        if !changes.is_empty() {
-            complex.set_labels(&changes);
-            return true;
+        let excess = sse[k] - classes.sse - NOISE_SPLIT_GAIN * noise * noise * cell_count[k] as f64;
+        if excess > 0.0 && best.is_none_or(|(b, _, _)| excess > b) {
+            best = Some((excess, k, classes.thresholds[0]));
         }
     }
-    false
+    best.map(|(_, k, t)| (k, t))
 }
 
 #[cfg(test)]

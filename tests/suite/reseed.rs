@@ -31,6 +31,23 @@ fn a_lost_phase_of_close_means_is_reseeded() {
     assert!(report.warnings[0].contains("fewer than the 3 distinct phases"));
 }
 
+/// Six phases 0.14 apart under noise σ = 0.2: the histogram start spends
+/// two phases on the large background and merges the two brightest levels.
+/// The re-seed must split the merged pair, whose cells' means hold a second
+/// level, not the background, whose cells differ by noise only (splitting it
+/// gives a duplicate again, and the run ended with an empty phase).
+#[test]
+fn the_reseed_splits_the_phase_that_merges_two_levels() {
+    let ph = Phantom2Kind::Disks(6).generate(256, 0.2, 1);
+    let view = ImageView::new_2d(ph.width, ph.height, &ph.image).unwrap();
+    let mut seg = Segmentation2::new(view, SegmentParams::new(6)).unwrap();
+    let report = seg.run(|_| {});
+    assert!(report.reseeds >= 1, "{report:?}");
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    let dice = mean_dice(&seg.label_image(), &ph.truth, 6);
+    assert!(dice > 0.85, "Dice {dice}");
+}
+
 /// More phases asked for than the image holds: the extra phase cannot be
 /// kept, and the report says so instead of a silent result.
 #[test]
