@@ -12,7 +12,14 @@
 //!   intermediate values, and a spare phase settles on them as a strip a
 //!   few pixels wide. Its *thickness* (area over boundary length in 2D,
 //!   volume over boundary area in 3D; half the width of a strip, a quarter
-//!   of the diameter of a disk) is below [`MIN_THICKNESS`] pixels.
+//!   of the diameter of a disk) is below [`MIN_THICKNESS`] pixels;
+//! - it has no plateau of its own: the phases' *plateau* intensities, the
+//!   means over their pixels beyond the blur of every edge
+//!   ([`partial_volume`]), must all differ by more than the duplicate
+//!   tolerance, and every phase must have such pixels. Blur lowers the mean
+//!   of a small or thin object of one true phase (a 5-px bar, the smallest
+//!   disk) enough at low noise for it to pass as a phase of its own; its
+//!   plateau is the true phase's, or it has none.
 //!
 //! Both tests are scale-free, so the choice does not depend on the
 //! intensities' units, and both follow from the piecewise-constant model:
@@ -22,6 +29,7 @@
 use super::error::SegmentError;
 use super::image::ImageView;
 use super::params::SegmentParams;
+use super::partial_volume::partial_volume;
 use super::raster::Raster;
 use super::Segmentation;
 use crate::complex::Complex;
@@ -89,7 +97,7 @@ pub fn choose_phases<K: Raster>(
                 "a phase is {thinnest:.2} px thick (a band along edges, not a region)"
             ))
         } else {
-            None
+            shared_plateau(&seg.label_image(), image, n, seg.duplicate_tolerance())
         };
         let accepted = reason.is_none() || n == 2;
         trials.push(PhaseTrial {
@@ -109,6 +117,34 @@ pub fn choose_phases<K: Raster>(
         phases: chosen,
         max_phases,
         trials,
+    })
+}
+
+/// Why the phases of `labels` are not all distinct regions by their
+/// plateaus (see the module documentation), or `None` when they are.
+fn shared_plateau(
+    labels: &[u8],
+    image: ImageView<'_>,
+    phases: usize,
+    tolerance: f64,
+) -> Option<String> {
+    let plateaus = partial_volume(labels, image.data, image.dims, phases).plateau;
+    if let Some(k) = plateaus.iter().position(Option::is_none) {
+        return Some(format!(
+            "phase {k} has no pixel beyond the blur of its edges (a thin structure or a band)"
+        ));
+    }
+    let mut sorted: Vec<(f64, usize)> = plateaus
+        .iter()
+        .enumerate()
+        .filter_map(|(k, p)| p.map(|p| (p, k)))
+        .collect();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    sorted.windows(2).find(|w| w[1].0 - w[0].0 < tolerance).map(|w| {
+        format!(
+            "phases {} and {} have the same plateau ({:.6} and {:.6}) within the noise: one phase whose parts differ by blur",
+            w[0].1, w[1].1, w[0].0, w[1].0
+        )
     })
 }
 

@@ -10,7 +10,7 @@ use super::model::{Flow, IterationState, Models};
 use super::models::{GivenMesh, PaperField};
 use super::params::{contrast_edge_length, SegmentParams};
 use super::raster::Raster;
-use super::reseed::{any_lost, lost_phases, merge_phase, split_worst_phase, LostPhase};
+use super::reseed::{any_lost, lost_phases, merge_phase, split_most_structured_phase, LostPhase};
 use super::thresholds::smallest_class_gap;
 use crate::complex::Complex;
 use crate::dsc::{DscParams, DscWorkspace};
@@ -618,7 +618,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// means about 0.2σ apart (a 256² disk image asked for three phases
     /// ended at 0.21σ), while distinct phases 0.4σ apart (four phases 0.1
     /// apart at σ = 0.25) must stay distinct.
-    fn duplicate_tolerance(&self) -> f64 {
+    pub fn duplicate_tolerance(&self) -> f64 {
         0.3 * self.intensity.noise + 1e-3 * self.intensity.scale()
     }
 
@@ -651,7 +651,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 self.intensity.low,
                 self.intensity.low + self.intensity.scale(),
             );
-            if split_worst_phase(
+            if split_most_structured_phase(
                 &mut self.complex,
                 &self.cells,
                 &self.phases,

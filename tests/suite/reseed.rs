@@ -53,19 +53,18 @@ fn the_reseed_splits_the_phase_that_merges_two_levels() {
 #[test]
 fn too_many_phases_give_a_warning() {
     let (w, h) = (96, 96);
-    let data: Vec<f32> = (0..w * h)
+    let mut data: Vec<f32> = (0..w * h)
         .map(|i| {
             let (x, y) = ((i % w) as f32, (i / w) as f32);
             let inside = (x - 48.0).powi(2) + (y - 48.0).powi(2) < 400.0;
-            // deterministic pseudo-noise
-            let n = (((i * 7919) % 1000) as f32 / 1000.0 - 0.5) * 0.3;
             if inside {
-                0.7 + n
+                0.7
             } else {
-                0.3 + n
+                0.3
             }
         })
         .collect();
+    dsc_seg::phantom::noise::add_gaussian_noise(&mut data, 0.09, 1);
     let view = ImageView::new_2d(w, h, &data).unwrap();
     let mut seg = Segmentation2::new(view, SegmentParams::new(4)).unwrap();
     let report = seg.run(|_| {});
