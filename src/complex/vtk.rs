@@ -164,35 +164,25 @@ impl Complex<D2> {
 
 /// Layer `complex`: the 3D interface as a VTK triangle surface.
 impl Complex<D3> {
-    /// The interface surface: every facet between two phases, once.
+    /// The interface surface: every facet between two phases, once,
+    /// oriented from the lower phase to the higher.
     pub fn interface_surface(&self) -> InterfaceSurface {
         let mut col = Collector::<3>::new(self);
-        for c in self.cell_ids() {
-            let li = self.label(c);
-            let cell = self.cell(c);
-            let pts = self.cell_points(c);
-            for (f, nb) in self.neighbours(c).iter().enumerate() {
-                let Some(nb) = *nb else { continue };
-                let lj = self.label(nb);
-                if lj <= li {
-                    continue;
-                }
-                let corners: Vec<usize> = (0..4).filter(|&k| k != f).collect();
-                let mut tri = [0u32; 3];
-                for (slot, &k) in tri.iter_mut().zip(&corners) {
-                    let p = pts[k];
-                    *slot = col.vertex(cell[k].index(), [p.x, p.y, p.z]);
-                }
-                // Orient the triangle so that its normal leaves `c` (phase li -> lj).
-                let (a, b, d) = (pts[corners[0]], pts[corners[1]], pts[corners[2]]);
-                let n = (b - a).cross(&(d - a));
-                if n.dot(&(D3::facet_normal(&pts[..], f))) < 0.0 {
-                    tri.swap(1, 2);
-                }
-                col.out.facets.push(tri);
-                col.out.phase.push(li);
-                col.out.phase_other.push(lj);
+        for f in self.interface_facets() {
+            let (lo, hi) = (f.a.min(f.b), f.a.max(f.b));
+            let mut tri = [0, 1, 2].map(|k| {
+                let p = f.points[k];
+                col.vertex(f.corners[k].index(), [p.x, p.y, p.z])
+            });
+            // The facet's normal points from phase `a` into `b`.
+            let towards_higher = if f.a == lo { f.normal } else { -f.normal };
+            let [p0, p1, p2] = f.points;
+            if (p1 - p0).cross(&(p2 - p0)).dot(&towards_higher) < 0.0 {
+                tri.swap(1, 2);
             }
+            col.out.facets.push(tri);
+            col.out.phase.push(lo);
+            col.out.phase_other.push(hi);
         }
         col.out
     }
