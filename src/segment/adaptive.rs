@@ -76,6 +76,19 @@ pub struct SizingParams {
     /// interfaces' refinement has done its work.
     #[serde(default)]
     pub settle: Option<usize>,
+    /// Coarse starts: how many times the start mesh is refined before the
+    /// first iteration (labelled, the field updated, the mesh resized to it
+    /// and labelled again), so that the first iteration starts with the
+    /// interfaces within about `L` of where the initialisation's thresholds
+    /// put them. Without, the start's coarse cells are refined around their
+    /// interfaces over the first iterations, each keeping its parent's
+    /// label, and the interfaces then travel the rest of the way at a
+    /// fraction of `L` per iteration. 0, the default, keeps that: on the
+    /// three- and four-phase 64³ phantoms the refined start lowered the
+    /// Dice (0.902–0.926 against 0.920–0.952), on the brain-like phantom it
+    /// raised it in fewer iterations (benches/RESULTS.md, "Speed, 3D").
+    #[serde(default)]
+    pub start_refinements: usize,
 }
 
 impl Default for SizingParams {
@@ -88,6 +101,7 @@ impl Default for SizingParams {
             residual_sigmas: 5.0,
             coarse_start: false,
             settle: None,
+            start_refinements: 0,
         }
     }
 }
