@@ -38,7 +38,8 @@ pub struct PhaseRow {
     /// Partial-volume area (2D) or volume (3D) in the frame's unit
     /// squared/cubed (see [`partial_volume`](super::partial_volume)).
     pub partial_volume: f64,
-    /// Standard error of [`PhaseRow::partial_volume`] due to the noise.
+    /// Standard error of [`PhaseRow::partial_volume`]: the noise's share and
+    /// how far the estimate moves when the labels move by one pixel/voxel.
     pub partial_volume_se: f64,
     /// Area (2D) or volume (3D) in the frame's unit squared/cubed: the
     /// pixels/voxels labelled with it times the pixel area/voxel volume.
@@ -344,15 +345,21 @@ mod tests {
         assert_eq!(m.phases[0].components, 1);
         assert!((m.phases[1].mean.unwrap() - 204.0).abs() < 1e-4);
         assert!(m.phases[1].std.unwrap() < 1e-4);
+        // Counted whole, the squares move with their labels: grown or shrunk
+        // by a pixel they gain or lose area, which the standard error says.
+        assert!(m.phases[1].partial_volume_se > 1.0);
         let csv = m.phases_csv(2);
         assert!(
             csv.starts_with(
                 "phase,count,pv_area_mm2,pv_area_se_mm2,count_area_mm2,mesh_area_mm2,mean,std,\
-                 components\n0,16,16,0,16,,"
+                 components\n0,16,16,"
             ),
             "{csv}"
         );
-        assert!(csv.contains("\n1,8,8,0,8,,204.0000"), "{csv}");
+        let row: Vec<&str> = csv.lines().nth(2).unwrap().split(',').collect();
+        assert_eq!(row[..3], ["1", "8", "8"], "{csv}");
+        assert_eq!(row[4..6], ["8", ""], "{csv}");
+        assert!(row[6].starts_with("204.0000"), "{csv}");
     }
 
     #[test]
