@@ -10,7 +10,7 @@ which is where the model puts a blurred edge.
 usage (from the repository root, after `cargo build --release` and
 `pip install -r benches/compare/requirements.txt`):
 
-  python3 benches/phase_measures.py --out OUT [--sizes 256 512] [--sizes3d 64 128] [--seed 1]
+  python3 benches/phase_measures.py --out OUT [--sizes 256 512] [--sizes3d 64 128] [--seeds 1 2 ... 8]
 """
 from __future__ import annotations
 
@@ -74,29 +74,35 @@ def model_volume(image):
     return int((image > t).sum())
 
 
-def two_d(out, sizes, sigmas, seed):
-    print("| image | phase | truth px | partial volume (± s.e.) | labels | mesh |")
-    print("|---|---|---|---|---|---|")
+def errors(estimate, truth):
+    return 100 * (estimate / truth - 1)
+
+
+def collect_2d(out, sizes, sigmas, seeds):
+    """{(image, phase): [(truth, pv, se, count, mesh) per seed]}"""
+    found = {}
     for name, phases in (("two_phase", 2), ("four_phase", 4)):
         for n in sizes:
             for s in sigmas:
                 tag = f"{name}_{n}_s{s:.2f}"
-                data = os.path.join(out, tag)
-                run("phantom", name, "--size", n, "--noise", s, "--seed", seed, "--out", data)
-                res = os.path.join(out, tag + "_out")
-                run("segment", os.path.join(data, name + ".png"), "--phases", phases,
-                    "--quiet", "--outputs", "labels,phases", "--out", res)
-                truth = np.array(Image.open(os.path.join(data, name + "_labels.png")))
-                for p, (pv, se, area, mesh) in enumerate(phases_csv(os.path.join(res, "phases.csv"))):
-                    count = int((truth == p).sum())
-                    print(f"| {tag} | {p} | {count} | {pct(pv, count)} ± {100 * se / count:.2f}% "
-                          f"| {pct(area, count)} | {pct(mesh, count)} |")
+                for seed in seeds:
+                    data = os.path.join(out, f"{tag}_seed{seed}")
+                    run("phantom", name, "--size", n, "--noise", s, "--seed", seed, "--out", data)
+                    res = data + "_out"
+                    run("segment", os.path.join(data, name + ".png"), "--phases", phases,
+                        "--quiet", "--outputs", "labels,phases", "--out", res)
+                    truth = np.array(Image.open(os.path.join(data, name + "_labels.png")))
+                    measured = phases_csv(os.path.join(res, "phases.csv"))
+                    for p, (pv, se, area, mesh) in enumerate(measured):
+                        count = int((truth == p).sum())
+                        found.setdefault((tag, p), []).append((count, pv, se, area, mesh))
+    return found
 
 
-def three_d(out, sizes, sigmas, seed):
-    print("| volume | truth voxels | analytic | partial volume (± s.e.) | labels | mesh "
-          "| model (noise-free) |")
-    print("|---|---|---|---|---|---|---|")
+def collect_3d(out, sizes, sigmas, seeds):
+    """{(volume, 1): [(truth, pv, se, count, mesh) per seed]} and the
+    analytic and noise-free model volumes per volume."""
+    found, extra = {}, {}
     for n in sizes:
         for name in ANALYTIC:
             clean = os.path.join(out, f"{name}_{n}_clean")
@@ -104,17 +110,59 @@ def three_d(out, sizes, sigmas, seed):
             model = model_volume(read_stack(os.path.join(clean, name + ".tif")).astype(float))
             for s in sigmas:
                 tag = f"{name}_{n}_s{s:.2f}"
-                data = os.path.join(out, tag)
-                run("phantom3d", name, "--size", n, "--noise", s, "--seed", seed, "--out", data)
-                res = os.path.join(out, tag + "_out")
-                run("segment3d", os.path.join(data, name + ".tif"), "--quiet",
-                    "--outputs", "labels,phases", "--out", res)
-                count = int((read_stack(os.path.join(data, name + "_labels.tif")) == 1).sum())
-                analytic = ANALYTIC[name] * n**3
-                pv, se, vol, mesh = phases_csv(os.path.join(res, "phases.csv"))[1]
-                print(f"| {tag} | {count} | {pct(analytic, count)} "
-                      f"| {pct(pv, count)} ± {100 * se / count:.2f}% | {pct(vol, count)} "
-                      f"| {pct(mesh, count)} | {pct(model, count)} |")
+                for seed in seeds:
+                    data = os.path.join(out, f"{tag}_seed{seed}")
+                    run("phantom3d", name, "--size", n, "--noise", s, "--seed", seed, "--out", data)
+                    res = data + "_out"
+                    run("segment3d", os.path.join(data, name + ".tif"), "--quiet",
+                        "--outputs", "labels,phases", "--out", res)
+                    count = int((read_stack(os.path.join(data, name + "_labels.tif")) == 1).sum())
+                    pv, se, vol, mesh = phases_csv(os.path.join(res, "phases.csv"))[1]
+                    found.setdefault((tag, 1), []).append((count, pv, se, vol, mesh))
+                extra[tag] = (ANALYTIC[name] * n**3, model)
+    return found, extra
+
+
+def first_seed_2d(found):
+    print("| image | phase | truth px | partial volume (± s.e.) | labels | mesh |")
+    print("|---|---|---|---|---|---|")
+    for (tag, p), runs in found.items():
+        count, pv, se, area, mesh = runs[0]
+        print(f"| {tag} | {p} | {count} | {pct(pv, count)} ± {100 * se / count:.2f}% "
+              f"| {pct(area, count)} | {pct(mesh, count)} |")
+
+
+def first_seed_3d(found, extra):
+    print("| volume | truth voxels | analytic | partial volume (± s.e.) | labels | mesh "
+          "| model (noise-free) |")
+    print("|---|---|---|---|---|---|---|")
+    for (tag, _), runs in found.items():
+        count, pv, se, vol, mesh = runs[0]
+        analytic, model = extra[tag]
+        print(f"| {tag} | {count} | {pct(analytic, count)} "
+              f"| {pct(pv, count)} ± {100 * se / count:.2f}% | {pct(vol, count)} "
+              f"| {pct(mesh, count)} | {pct(model, count)} |")
+
+
+def over_seeds(found, seeds):
+    """Per image and phase: the partial-volume and label-count errors over
+    the seeds (mean, sample standard deviation, largest magnitude) and the
+    root mean square of error / standard error (about 1 when the standard
+    error covers the error)."""
+    print(f"\nOver noise seeds {seeds[0]}-{seeds[-1]} ({len(seeds)} runs per row):\n")
+    print("| image | phase | partial volume: mean | s.d. | largest | rms(error/s.e.) "
+          "| labels: mean | s.d. | largest |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for (tag, p), runs in found.items():
+        a = np.array(runs, dtype=float)
+        truth, pv, se, count = a[:, 0], a[:, 1], a[:, 2], a[:, 3]
+        e_pv, e_count = errors(pv, truth), errors(count, truth)
+        z = np.sqrt(np.mean(((pv - truth) / se) ** 2))
+        sd = (lambda e: e.std(ddof=1)) if len(runs) > 1 else (lambda e: 0.0)
+        largest = lambda e: e[np.argmax(np.abs(e))]
+        print(f"| {tag} | {p} | {e_pv.mean():+.2f}% | {sd(e_pv):.2f}% | {largest(e_pv):+.2f}% "
+              f"| {z:.2f} | {e_count.mean():+.2f}% | {sd(e_count):.2f}% "
+              f"| {largest(e_count):+.2f}% |")
 
 
 def main():
@@ -123,13 +171,23 @@ def main():
     ap.add_argument("--sizes", type=int, nargs="*", default=[256, 512])
     ap.add_argument("--sizes3d", type=int, nargs="*", default=[64, 128])
     ap.add_argument("--sigmas", type=float, nargs="*", default=[0.1, 0.2])
-    ap.add_argument("--seed", type=int, default=1, help="noise seed of the phantoms")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[1],
+                    help="noise seeds of the phantoms: the first one's table, then the "
+                         "errors' statistics over all")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     if a.sizes:
-        two_d(a.out, a.sizes, a.sigmas, a.seed)
+        found = collect_2d(a.out, a.sizes, a.sigmas, a.seeds)
+        first_seed_2d(found)
+        if len(a.seeds) > 1:
+            over_seeds(found, a.seeds)
     if a.sizes3d:
-        three_d(a.out, a.sizes3d, a.sigmas, a.seed)
+        if a.sizes:
+            print()
+        found, extra = collect_3d(a.out, a.sizes3d, a.sigmas, a.seeds)
+        first_seed_3d(found, extra)
+        if len(a.seeds) > 1:
+            over_seeds(found, a.seeds)
 
 
 if __name__ == "__main__":
