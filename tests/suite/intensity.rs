@@ -93,10 +93,22 @@ fn float_tiff_keeps_negative_values() {
 }
 
 fn labels_3d(data: &[f32], n: usize) -> Vec<u8> {
+    labels_3d_with(data, n, SegmentParams::new_3d(2))
+}
+
+fn labels_3d_with(data: &[f32], n: usize, params: SegmentParams) -> Vec<u8> {
     let view = ImageView::new_3d([n, n, n], data).unwrap();
-    let mut seg = Segmentation3::new(view, SegmentParams::new_3d(2)).unwrap();
+    let mut seg = Segmentation3::new(view, params).unwrap();
     seg.run(|_| {});
     seg.label_image()
+}
+
+/// The 3D parameters on the uniform mesh (`segment3d --uniform`).
+fn uniform_3d() -> SegmentParams {
+    let mut params = SegmentParams::new_3d(2);
+    params.sizing.adaptive = false;
+    params.sizing.coarse_start = false;
+    params
 }
 
 #[test]
@@ -148,8 +160,13 @@ fn encodings_of_a_3d_phantom_give_the_same_labels() {
         }
         let dice = mean_dice(&labels, &base, 2);
         let truth = mean_dice(&labels, &ph.truth, 2);
-        // 64 levels lose information (a run on other data may stop at
-        // another iteration): it must be as accurate; the exact
+        // 64 levels change the data (by up to half a level in 64): with the
+        // default adaptive mesh from a coarse start the first flip round of
+        // the coarse cells can differ by a cell, and the mesh, refined from
+        // there, fits the noise with vertices elsewhere (about a tenth of a
+        // voxel: Dice 0.988 between the runs, as for ±0.1 grey levels of
+        // noise added to the 8-bit data); it must be as accurate, and the
+        // uniform mesh must give the same labels (below). The exact
         // re-encodings must give the same labels.
         let lossy = what.contains("64 levels");
         let ok = if lossy {
@@ -164,6 +181,32 @@ fn encodings_of_a_3d_phantom_give_the_same_labels() {
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
+}
+
+/// On the uniform mesh (data-independent until labels flip) the 64-level
+/// re-encoding of the 3D phantom gives the 8-bit run's labels.
+#[test]
+fn a_3d_phantom_with_64_levels_gives_the_same_labels_on_the_uniform_mesh() {
+    let n = 48;
+    let ph = shapes3d::torus(n, 0.1, 2);
+    let bytes: Vec<u8> = ph
+        .image
+        .iter()
+        .map(|&v| (v * 255.0).round() as u8)
+        .collect();
+    let eight: Vec<f32> = bytes.iter().map(|&b| b as f32 / 255.0).collect();
+    let levels64: Vec<f32> = bytes
+        .iter()
+        .map(|&b| (b as f32 * 63.0 / 255.0).round() / 65535.0)
+        .collect();
+    let base = labels_3d_with(&eight, n, uniform_3d());
+    let labels = labels_3d_with(&levels64, n, uniform_3d());
+    assert!(mean_dice(&base, &ph.truth, 2) > 0.97);
+    let dice = mean_dice(&labels, &base, 2);
+    assert!(
+        dice >= 0.99,
+        "Dice {dice} between the 64-level and the 8-bit run"
+    );
 }
 
 /// A 16-bit volume's report gives its range and phase means in the file's
