@@ -115,7 +115,8 @@ impl Helper {
 /// Seconds spent in each stage of the evolution.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct StageTimes {
-    /// Building and initialising the mesh.
+    /// Building and initialising the mesh (with the refined start's
+    /// refinement and flips, if any).
     pub setup: f64,
     /// Integrating the image over the cells.
     pub integrate: f64,
@@ -375,7 +376,11 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         };
         s.step = s.params.step_fraction;
         s.nu = s.length_weight();
+        // The refined start is setup: its integration and flips stay out
+        // of the iterations' stage times.
+        let stages = s.times;
         s.refine_start(refinements);
+        s.times = stages;
         s.times.setup = t0.elapsed().as_secs_f64();
         Ok(s)
     }
