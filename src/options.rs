@@ -41,12 +41,14 @@ pub struct EvolutionArgs {
     /// Weight w of the length (3D: area) term of the Mumford–Shah energy, a
     /// width in pixels (3D: voxels): a structure narrower than w pixels (a
     /// disk of smaller radius) whose intensity differs from its surroundings
-    /// by Δ, the mean gap between adjacent initial phase means, costs more in
-    /// boundary than it gains in fit and is removed; one k times that contrast
-    /// is kept down to w/k² pixels. One pixel of boundary costs w·Δ²/2 of
-    /// data energy, so scaling or shifting the intensities changes nothing,
-    /// nor does the noise level. Larger w: smoother, fewer small regions
-    /// [default: 1.6 for 2 phases, 5.5 for more; 3D 0.6 and 1.2].
+    /// by Δ, the smallest gap between adjacent initial phase means (not below
+    /// the pixels' spread about their phase means, not above the mean gap),
+    /// costs more in boundary than
+    /// it gains in fit and is removed; one k times that contrast is kept down
+    /// to w/k² pixels. One pixel of boundary costs w·Δ²/2 of data energy, so
+    /// scaling or shifting the intensities changes nothing. Larger w:
+    /// smoother, fewer small regions [default: 1.6 for 2 phases, 5.5 for more;
+    /// 3D 0.6 and 1.2].
     #[arg(long, allow_hyphen_values = true)]
     pub length_weight: Option<f64>,
     /// Adaptive resolution: a graded mesh, L at the interfaces, finer where

@@ -1,6 +1,7 @@
 //! The iteration driver: integrate, flip, compute forces, deform, check convergence.
 
 use super::adaptive::{AdaptiveSizing, Sizes};
+use super::contrast::phase_contrast;
 use super::error::SegmentError;
 use super::force_stage::ForceStage;
 use super::image::ImageView;
@@ -433,28 +434,22 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
     }
 
-    /// ν = `length_weight` × Δ² / 2: Δ the contrast between adjacent phases,
-    /// the spread of the known means over the gaps between them (the robust
-    /// range over N if fewer than two are known). A stripe d pixels wide at
+    /// ν = `length_weight` × Δ² / 2, Δ the contrast between phases
+    /// ([`phase_contrast`]: the smallest gap between adjacent known means,
+    /// not below the pixels' spread about their phase means nor above the
+    /// mean gap; the robust range
+    /// over N if fewer than two means are known). A stripe d pixels wide at
     /// contrast Δ lowers the data term by d·Δ² per pixel of its length and
     /// costs 2ν in boundary, so it pays for itself when d > `length_weight`
     /// (a disk when its radius does): the weight is a width in pixels, and ν
     /// is in intensity² per pixel like the data term, so `a·I + b` gives the
-    /// same labels as `I`, and the noise level does not enter. The mean gap
-    /// rather than the smallest: a phase that starts as a split of noise
-    /// close to another must not make every boundary free.
+    /// same labels as `I`.
     fn length_weight(&self) -> f64 {
         let known: Vec<f64> = self.phases.mean.iter().flatten().copied().collect();
-        let (lo, hi) = known
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &m| {
-                (lo.min(m), hi.max(m))
-            });
-        let contrast = if known.len() >= 2 && hi > lo {
-            (hi - lo) / (known.len() - 1) as f64
-        } else {
-            self.intensity.scale() / self.params.phases as f64
-        };
+        let pixels: u64 = self.phases.count.iter().sum();
+        let spread = (self.data_energy() / pixels.max(1) as f64).sqrt();
+        let contrast = phase_contrast(&known, spread)
+            .unwrap_or_else(|| self.intensity.scale() / self.params.phases as f64);
         self.params.length_weight * contrast * contrast / 2.0
     }
 

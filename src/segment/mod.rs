@@ -10,6 +10,7 @@
 //!   per-phase means;
 //! - [`intensity`]: the input's intensity scale (robust range, noise,
 //!   histogram), which makes the energy invariant to `a·I + b`;
+//! - [`contrast`]: the phase contrast Δ of the length weight `ν = w·Δ²/2`;
 //! - [`thresholds`]: least-variance histogram splits (multi-Otsu, k-means++);
 //! - [`init`]: histogram, range/interval, disk and label-image initialisations;
 //! - [`forces`]: region forces (eqs. 5–7) and rigidity (eq. 2);
@@ -35,6 +36,7 @@
 pub mod adaptive;
 pub mod auto;
 pub mod cluster_flips;
+pub mod contrast;
 pub mod driver;
 pub mod error;
 pub mod flips;

@@ -186,21 +186,22 @@ pub struct SegmentParams {
     #[serde(default)]
     pub converge_plateau: Option<usize>,
     /// Weight `w` of the length (3D: area) term of the Mumford–Shah energy,
-    /// a width in pixels (3D: voxels): `ν = w·Δ²/2`, with Δ the mean gap
-    /// between adjacent initial phase means (the spread of the means over the
-    /// number of gaps: a phase split out of noise close to another does not
-    /// make every boundary nearly free). A stripe `d` pixels wide whose
+    /// a width in pixels (3D: voxels): `ν = w·Δ²/2`, with Δ the smallest gap
+    /// between adjacent initial phase means, not below the pixels' spread
+    /// about their phase means (a phase split out of noise close to another
+    /// does not make every boundary nearly free) nor above the mean gap ([`phase_contrast`](super::contrast::phase_contrast)).
+    /// A stripe `d` pixels wide whose
     /// intensity differs by Δ from its surroundings lowers the data term by
     /// `d·Δ²` per pixel of its length and costs `2ν = w·Δ²` in boundary, so
     /// structures narrower than `w` pixels (disks of smaller radius) at that
     /// contrast are not worth their boundary, and wider ones are; at a
     /// contrast `k·Δ` the limit is `w/k²`. ν is in intensity² per pixel of
     /// length like the data term per pixel, so `a·I + b` gives the labels of
-    /// `I`, and it does not grow with the noise. ν is reported, and used by
-    /// the flip guard. Default 1.6 for two phases (lower leaves the crossings
-    /// of Fig. 2 unresolved), 5.5 for more (with more phases the
-    /// pixel-dominant flip rule grows bands of intermediate phases along
-    /// blurred edges, which only 4–6 removes); in 3D 0.6 and 1.2
+    /// `I`. ν is reported, and used by the flip guard. Default 1.6 for two
+    /// phases (lower leaves the crossings of Fig. 2 unresolved), 5.5 for
+    /// more (with more phases the pixel-dominant flip rule grows bands of
+    /// intermediate phases along blurred edges, and noise-split phases
+    /// persist at lower weights); in 3D 0.6 and 1.2
     /// ([`new_3d`](Self::new_3d)). Evidence: `docs/parameters.md`.
     pub length_weight: f64,
     /// Spacing of the samples along interface facets, in pixels.
