@@ -42,7 +42,7 @@ pub struct EvolutionArgs {
     /// width in pixels (3D: voxels): a structure narrower than w pixels (a
     /// disk of smaller radius) whose intensity differs from its surroundings
     /// by Δ, the smallest gap between adjacent initial phase means (not below
-    /// the pixels' spread about their phase means, not above the mean gap),
+    /// twice the pixels' spread about their means, not above the mean gap),
     /// costs more in boundary than
     /// it gains in fit and is removed; one k times that contrast is kept down
     /// to w/k² pixels. One pixel of boundary costs w·Δ²/2 of data energy, so

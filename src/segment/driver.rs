@@ -436,7 +436,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
 
     /// ν = `length_weight` × Δ² / 2, Δ the contrast between phases
     /// ([`phase_contrast`]: the smallest gap between adjacent known means,
-    /// not below the pixels' spread about their phase means nor above the
+    /// not below twice the pixels' spread about their phase means nor above the
     /// mean gap; the robust range
     /// over N if fewer than two means are known). A stripe d pixels wide at
     /// contrast Δ lowers the data term by d·Δ² per pixel of its length and

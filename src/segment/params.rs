@@ -187,8 +187,8 @@ pub struct SegmentParams {
     pub converge_plateau: Option<usize>,
     /// Weight `w` of the length (3D: area) term of the Mumford–Shah energy,
     /// a width in pixels (3D: voxels): `ν = w·Δ²/2`, with Δ the smallest gap
-    /// between adjacent initial phase means, not below the pixels' spread
-    /// about their phase means (a phase split out of noise close to another
+    /// between adjacent initial phase means, not below twice the pixels'
+    /// spread about their phase means (a phase split out of noise close to another
     /// does not make every boundary nearly free) nor above the mean gap ([`phase_contrast`](super::contrast::phase_contrast)).
     /// A stripe `d` pixels wide whose
     /// intensity differs by Δ from its surroundings lowers the data term by
