@@ -220,9 +220,9 @@ impl SegmentOptions {
 /// The options of a 3D segmentation (everything but the input and outputs).
 #[derive(Args, Clone, Debug)]
 pub struct Segment3dOptions {
-    /// Number of phases N, 2..=64.
-    #[arg(long, allow_hyphen_values = true, default_value_t = 2)]
-    pub phases: i64,
+    /// Number of phases N, 2..=64 [default: the phantom's number without VOLUME, else 2].
+    #[arg(long, allow_hyphen_values = true)]
+    pub phases: Option<i64>,
     /// Average edge length L of the mesh in the volume's length unit (voxels without a voxel
     /// size) [default: smallest side/64·sqrt(N-1) clamped to 3..10 voxel-sized steps].
     #[arg(long, allow_hyphen_values = true)]
@@ -275,10 +275,11 @@ impl Segment3dOptions {
         parse_spacing(self.spacing.as_deref(), "X,Y,Z")
     }
 
-    /// The segmentation parameters these options give (see
-    /// [`SegmentOptions::params`] for `--init labels`).
-    pub fn params(&self) -> Result<SegmentParams> {
-        let mut params = SegmentParams::new_3d(phase_count(Some(self.phases), 2)?);
+    /// The segmentation parameters these options give, `default_phases`
+    /// when `--phases` is absent (see [`SegmentOptions::params`] for
+    /// `--init labels`).
+    pub fn params(&self, default_phases: usize) -> Result<SegmentParams> {
+        let mut params = SegmentParams::new_3d(phase_count(self.phases, default_phases)?);
         params.edge_length = self.edge_length;
         if self.uniform {
             params.sizing.adaptive = false;

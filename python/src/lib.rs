@@ -64,7 +64,7 @@ fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyRes
                 Some(spacing) => convert::volume(image)?.respaced(spacing),
                 None => convert::volume(image)?,
             };
-            let params = o.options.params().map_err(to_py)?;
+            let params = o.options.params(2).map_err(to_py)?;
             let params = with_init_labels3(params, o.options.init_labels.as_deref(), volume.dims())
                 .map_err(to_py)?;
             let surface = o.options.init_surface;

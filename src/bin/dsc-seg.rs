@@ -219,27 +219,32 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
     let outputs = Outputs::parse(&a.batch.outputs, true)?;
     if is_batch(&a.volumes, true) {
         let task = Task::Volume {
-            params: a.options.params()?,
+            params: a.options.params(2)?,
             init_labels: a.options.init_labels.clone(),
             init_surface: a.options.init_surface.clone(),
             spacing: a.options.spacing()?,
         };
         return run_batch(&a.volumes, task, a.out, outputs, &a.batch, a.quiet);
     }
-    let source = match a.volumes.first() {
-        Some(p) => Source::File(p.clone()),
-        None => Source::Phantom {
-            name: a.phantom.clone(),
-            size: a.phantom_size,
-            noise: a.phantom_noise,
-            seed: a.phantom_seed,
-        },
+    let (source, default_phases) = match a.volumes.first() {
+        Some(p) => (Source::File(p.clone()), 2),
+        None => (
+            Source::Phantom {
+                name: a.phantom.clone(),
+                size: a.phantom_size,
+                noise: a.phantom_noise,
+                seed: a.phantom_seed,
+            },
+            // An unknown name is reported when the phantom is made.
+            dsc_seg::phantom::Phantom3Kind::from_name(&a.phantom)
+                .map_or(2, dsc_seg::phantom::Phantom3Kind::phases),
+        ),
     };
     let spacing = a.options.spacing()?;
     let job = Segment3dJob {
         source,
         out: a.out,
-        params: a.options.params()?,
+        params: a.options.params(default_phases)?,
         init_labels: a.options.init_labels,
         init_surface: a.options.init_surface,
         outputs,

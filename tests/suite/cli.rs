@@ -1,5 +1,5 @@
 //! The `dsc-seg` command: outputs on success, and one clear error line and a
-//! non-zero exit for every kind of bad input (issue 3, must-show 4).
+//! non-zero exit for every kind of bad input.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -205,6 +205,36 @@ fn segment_without_image_runs_a_phantom() {
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     let dice = report["truth_dice"].as_f64().unwrap();
     assert!(dice > 0.85, "dice {dice}");
+}
+
+/// A 3D phantom without `--phases` is segmented into its own number of
+/// phases (the four-phase volume ran with 2 and lost half its phases
+/// silently).
+#[test]
+fn segment3d_phantom_takes_its_number_of_phases() {
+    let d = tmp();
+    let out = d.path().join("p");
+    let o = bin()
+        .args([
+            "segment3d",
+            "--phantom",
+            "four_phase",
+            "--phantom-size",
+            "24",
+            "--max-iterations",
+            "1",
+            "--outputs",
+            "report",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["params"]["phases"], 4);
 }
 
 #[test]

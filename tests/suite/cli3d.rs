@@ -1,5 +1,5 @@
 //! `dsc-seg segment3d` on bad input: one clear error line, a non-zero exit,
-//! no panic and nothing written (issue 7). Volumes are tiny so this stays fast.
+//! no panic and nothing written. Volumes are tiny so this stays fast.
 
 use crate::cli::{bin, empty_out, fails, tmp, SEGMENT3D};
 use dsc_seg::io::{save_labels_tiff, save_nifti, Volume};

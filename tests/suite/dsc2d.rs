@@ -1,4 +1,4 @@
-//! The 2D DSC engine's must-show behaviours (foundation issue).
+//! The 2D DSC engine's required behaviours.
 
 use crate::common::*;
 use dsc_seg::complex::VertexKind;

@@ -1,4 +1,4 @@
-//! The 3D DSC's must-show behaviours (issue 5): topology changes of balls and
+//! The 3D DSC's required behaviours: topology changes of balls and
 //! a torus, `validate()` after every deform, the tet quality distribution.
 
 use crate::common::*;

@@ -1,4 +1,4 @@
-//! The three example forces of issue 8 (balloon, edge attraction, volcano):
+//! The three example forces (balloon, edge attraction, volcano):
 //! each test runs the example's own scenario and asserts its outcome.
 
 use dsc_seg::pipeline::mean_dice;

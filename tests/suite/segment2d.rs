@@ -1,4 +1,4 @@
-//! The paper's qualitative results (issue 3, must-show 1–3), each checked by
+//! The paper's qualitative results, each checked by
 //! topology and Dice on small phantoms.
 
 use crate::common::assert_valid;
