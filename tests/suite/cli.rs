@@ -183,26 +183,23 @@ fn segment_writes_every_output() {
     assert!(vtu.contains("phase"));
 }
 
-#[test]
-fn segment_without_image_runs_a_phantom() {
+/// Runs `dsc-seg` with `args` and `--quiet --out DIR` and returns its report.
+fn report_of_run(args: &[&str]) -> serde_json::Value {
     let d = tmp();
     let out = d.path().join("p");
     let o = bin()
-        .args([
-            "segment",
-            "--phantom",
-            "two_phase",
-            "--phantom-size",
-            "96",
-            "--quiet",
-            "--out",
-        ])
+        .args(args)
+        .args(["--quiet", "--out"])
         .arg(&out)
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn segment_without_image_runs_a_phantom() {
+    let report = report_of_run(&["segment", "--phantom", "two_phase", "--phantom-size", "96"]);
     let dice = report["truth_dice"].as_f64().unwrap();
     assert!(dice > 0.85, "dice {dice}");
 }
@@ -212,28 +209,17 @@ fn segment_without_image_runs_a_phantom() {
 /// silently).
 #[test]
 fn segment3d_phantom_takes_its_number_of_phases() {
-    let d = tmp();
-    let out = d.path().join("p");
-    let o = bin()
-        .args([
-            "segment3d",
-            "--phantom",
-            "four_phase",
-            "--phantom-size",
-            "24",
-            "--max-iterations",
-            "1",
-            "--outputs",
-            "report",
-            "--quiet",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let report = report_of_run(&[
+        "segment3d",
+        "--phantom",
+        "four_phase",
+        "--phantom-size",
+        "24",
+        "--max-iterations",
+        "1",
+        "--outputs",
+        "report",
+    ]);
     assert_eq!(report["params"]["phases"], 4);
 }
 

@@ -103,6 +103,19 @@ fn labels_3d_with(data: &[f32], n: usize, params: SegmentParams) -> Vec<u8> {
     seg.label_image()
 }
 
+/// The `n³` torus phantom (σ 0.1, seed 2), its 8-bit encoding and that
+/// encoding read back as intensities in 0..1.
+fn torus_as_8_bit(n: usize) -> (dsc_seg::phantom::Phantom3, Vec<u8>, Vec<f32>) {
+    let ph = shapes3d::torus(n, 0.1, 2);
+    let bytes: Vec<u8> = ph
+        .image
+        .iter()
+        .map(|&v| (v * 255.0).round() as u8)
+        .collect();
+    let eight = bytes.iter().map(|&b| b as f32 / 255.0).collect();
+    (ph, bytes, eight)
+}
+
 /// The 3D parameters on the uniform mesh (`segment3d --uniform`).
 fn uniform_3d() -> SegmentParams {
     let mut params = SegmentParams::new_3d(2);
@@ -114,13 +127,7 @@ fn uniform_3d() -> SegmentParams {
 #[test]
 fn encodings_of_a_3d_phantom_give_the_same_labels() {
     let n = 48;
-    let ph = shapes3d::torus(n, 0.1, 2);
-    let bytes: Vec<u8> = ph
-        .image
-        .iter()
-        .map(|&v| (v * 255.0).round() as u8)
-        .collect();
-    let eight: Vec<f32> = bytes.iter().map(|&b| b as f32 / 255.0).collect();
+    let (ph, bytes, eight) = torus_as_8_bit(n);
     let base = labels_3d(&eight, n);
     assert!(mean_dice(&base, &ph.truth, 2) > 0.97);
     let encodings: [(&str, Vec<f32>, bool); 4] = [
@@ -188,13 +195,7 @@ fn encodings_of_a_3d_phantom_give_the_same_labels() {
 #[test]
 fn a_3d_phantom_with_64_levels_gives_the_same_labels_on_the_uniform_mesh() {
     let n = 48;
-    let ph = shapes3d::torus(n, 0.1, 2);
-    let bytes: Vec<u8> = ph
-        .image
-        .iter()
-        .map(|&v| (v * 255.0).round() as u8)
-        .collect();
-    let eight: Vec<f32> = bytes.iter().map(|&b| b as f32 / 255.0).collect();
+    let (ph, bytes, eight) = torus_as_8_bit(n);
     let levels64: Vec<f32> = bytes
         .iter()
         .map(|&b| (b as f32 * 63.0 / 255.0).round() / 65535.0)
