@@ -15,7 +15,7 @@
 //!   of the diameter of a disk) is below [`MIN_THICKNESS`] pixels;
 //! - it has no plateau of its own: the phases' *plateau* intensities, the
 //!   means over their pixels beyond the blur of every edge
-//!   ([`partial_volume`]), must all differ by more than the duplicate
+//!   ([`phase_plateaus`]), must all differ by more than the duplicate
 //!   tolerance, and every phase must have such pixels. Blur lowers the mean
 //!   of a small or thin object of one true phase (a 5-px bar, the smallest
 //!   disk) enough at low noise for it to pass as a phase of its own; its
@@ -29,7 +29,7 @@
 use super::error::SegmentError;
 use super::image::ImageView;
 use super::params::SegmentParams;
-use super::partial_volume::partial_volume;
+use super::partial_volume::phase_plateaus;
 use super::raster::Raster;
 use super::Segmentation;
 use crate::complex::Complex;
@@ -128,7 +128,7 @@ fn shared_plateau(
     phases: usize,
     tolerance: f64,
 ) -> Option<String> {
-    let plateaus = partial_volume(labels, image.data, image.dims, phases).plateau;
+    let plateaus = phase_plateaus(labels, image.data, image.dims, phases);
     if let Some(k) = plateaus.iter().position(Option::is_none) {
         return Some(format!(
             "phase {k} has no pixel beyond the blur of its edges (a thin structure or a band)"

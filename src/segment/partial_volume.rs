@@ -111,6 +111,26 @@ pub fn partial_volume(
     estimate
 }
 
+/// The plateau intensity of each phase of `labels` (as in
+/// [`partial_volume`]): the mean over its pixels beyond the band, deepest
+/// first; `None` for a phase without such pixels (or with more than
+/// [`MAX_PHASES`] phases, where no plateau is taken).
+pub fn phase_plateaus(
+    labels: &[u8],
+    values: &[f32],
+    dims: [usize; 3],
+    phases: usize,
+) -> Vec<Option<f64>> {
+    if !(2..=MAX_PHASES).contains(&phases) {
+        return vec![None; phases];
+    }
+    let (_, depth) = band_and_depth(labels, dims, phases);
+    plateaus(labels, values, &depth, phases)
+        .iter()
+        .map(|p| p.map(|p| p.mean))
+        .collect()
+}
+
 /// How much each phase's estimate moves when its labels move by one pixel:
 /// half the difference between the estimates with the phase grown and
 /// shrunk by one pixel (see the module documentation).
