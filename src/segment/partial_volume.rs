@@ -114,7 +114,7 @@ pub fn partial_volume(
 /// The plateau intensity of each phase of `labels` (as in
 /// [`partial_volume`]): the mean over its pixels beyond the band, deepest
 /// first; `None` for a phase without such pixels (or with more than
-/// [`MAX_PHASES`] phases, where no plateau is taken).
+/// 16 phases, where no plateau is taken).
 pub fn phase_plateaus(
     labels: &[u8],
     values: &[f32],
