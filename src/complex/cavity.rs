@@ -68,6 +68,15 @@ fn rename_key(key: FacetKey, removed: VertexId, kept: VertexId) -> Option<FacetK
 /// (returned as `(key, a, b)`) and taken out of the list; three or more, or two
 /// domain-boundary facets, cannot be glued.
 type Glued = SmallVec<[(FacetKey, Option<CellId>, Option<CellId>); 4]>;
+/// Which vertices a replacement classifies again.
+#[derive(Clone, Copy, Debug)]
+enum Reclassify {
+    /// Every corner of the new cells (the label field or positions may have changed).
+    AllCorners,
+    /// Only the vertices the new cells add (the label field is kept).
+    NewVertices,
+}
+
 type Outside = SmallVec<[(FacetKey, Option<CellId>, bool); INLINE]>;
 fn glue_coinciding(outside: &mut Outside) -> Result<Glued, Rejection> {
     let mut glued = Glued::new();
@@ -118,12 +127,21 @@ impl<K: Dim> Complex<K> {
 
     /// Replaces the cells `old` by `new` (whose ids are the next ones, in
     /// order). On rejection nothing changes.
+    ///
+    /// For retriangulations that keep the label field: at every point of the
+    /// cavity a new cell carries the label the old cell there carried (a flip
+    /// inside one phase, an edge split), and no vertex moves. A vertex's class
+    /// is the number of same-label pieces of its star, which are the pieces of
+    /// a small sphere around it cut by the interface facets through it (the
+    /// star is star-shaped, every cell being positively oriented), so it
+    /// depends on the label field near the vertex alone: the vertices already
+    /// there keep their classes, and only the new ones are classified.
     pub(crate) fn replace_cells(
         &mut self,
         old: &[CellId],
         new: &[(K::Cell, Label)],
     ) -> Result<(), Rejection> {
-        self.replace_cells_merging(old, new, None)
+        self.replace_cells_then(old, new, None, Reclassify::NewVertices)
     }
 
     /// [`replace_cells`](Self::replace_cells) for a collapse of `merge = (removed, kept)`:
@@ -137,6 +155,17 @@ impl<K: Dim> Complex<K> {
         old: &[CellId],
         new: &[(K::Cell, Label)],
         merge: Option<(VertexId, VertexId)>,
+    ) -> Result<(), Rejection> {
+        self.replace_cells_then(old, new, merge, Reclassify::AllCorners)
+    }
+
+    /// The replacement, then the classes of the vertices `reclassify` names.
+    fn replace_cells_then(
+        &mut self,
+        old: &[CellId],
+        new: &[(K::Cell, Label)],
+        merge: Option<(VertexId, VertexId)>,
+        reclassify: Reclassify,
     ) -> Result<(), Rejection> {
         if old.iter().any(|&c| !self.is_alive(c)) {
             return Err(Rejection::Stale);
@@ -270,9 +299,24 @@ impl<K: Dim> Complex<K> {
                 }
             }
         }
-        let fresh: SmallVec<[CellId; INLINE / 2]> =
-            (base..base + new.len() as u32).map(CellId).collect();
-        self.reclassify_cells(&fresh);
+        match reclassify {
+            Reclassify::AllCorners => {
+                let fresh: SmallVec<[CellId; INLINE / 2]> =
+                    (base..base + new.len() as u32).map(CellId).collect();
+                self.reclassify_cells(&fresh);
+            }
+            Reclassify::NewVertices => {
+                let mut added: SmallVec<[VertexId; 4]> = new
+                    .iter()
+                    .flat_map(|(cell, _)| cell.as_ref().iter().copied())
+                    .filter(|v| {
+                        !old.iter()
+                            .any(|&c| self.cells[c.index()].as_ref().contains(v))
+                    })
+                    .collect();
+                self.reclassify_vertices(&mut added);
+            }
+        }
         Ok(())
     }
 }
