@@ -84,6 +84,21 @@ pub struct Measurements {
     /// 3D: total length of the junction curves (edges in three or more
     /// interface triangles).
     pub junction_length: Option<f64>,
+    /// Where the intensities saturate (see [`Saturation`]).
+    pub saturation: Saturation,
+}
+
+/// The intensities at which the input saturates (in the units of
+/// [`Measurements::intensity_unit`]; `None`: that end does not), found as a
+/// pile of pixels/voxels on the extreme value (clipping, or a noise-free
+/// phase at the extreme, which needs no correction). The partial-volume
+/// estimate corrects its fractions for the clipping there.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Saturation {
+    /// The low end, when clipped.
+    pub low: Option<f64>,
+    /// The high end, when clipped.
+    pub high: Option<f64>,
 }
 
 impl Measurements {
@@ -143,6 +158,10 @@ impl Measurements {
             interfaces: Vec::new(),
             triple_junctions: None,
             junction_length: None,
+            saturation: Saturation {
+                low: pv.limits.low.map(|v| map.original(v)),
+                high: pv.limits.high.map(|v| map.original(v)),
+            },
         }
     }
 
@@ -360,6 +379,24 @@ mod tests {
         assert_eq!(row[..3], ["1", "8", "8"], "{csv}");
         assert_eq!(row[4..6], ["8", ""], "{csv}");
         assert!(row[6].starts_with("204.0000"), "{csv}");
+    }
+
+    #[test]
+    fn saturation_is_reported_in_the_files_units() {
+        // A ramp of 1000 pixels clipped at 0.9 (10 % on it), never at 0.
+        let values: Vec<f32> = (0..1000).map(|i| (i as f32 / 999.0).min(0.9)).collect();
+        let labels: Vec<u8> = values.iter().map(|&v| u8::from(v > 0.5)).collect();
+        let frame = Frame::image_rows_down(1000, 1, [1.0, 1.0], "px");
+        let m = Measurements::from_labels(
+            &labels,
+            &values,
+            Some(IntensityMap::unsigned(16)),
+            &frame,
+            2,
+        );
+        assert_eq!(m.saturation.low, None);
+        let high = m.saturation.high.unwrap();
+        assert!((high - 0.9 * 65535.0).abs() < 0.01, "{high}");
     }
 
     #[test]

@@ -30,11 +30,15 @@
 //!   volcano);
 //! - [`adaptive`]: the sizing field of adaptive resolution (refinement
 //!   where the data is not explained, coarsening where nothing happens);
+//! - [`measurements`]: a finished segmentation's per-phase and per-interface
+//!   figures; [`partial_volume`]: areas/volumes from the band's intensities;
+//!   [`censored`]: the model of intensities clipped where the data saturate;
 //! - [`driver`]: the session loop, the Mumford–Shah energy and the stopping rule;
 //! - [`params`] and [`error`].
 
 pub mod adaptive;
 pub mod auto;
+pub mod censored;
 pub mod cluster_flips;
 pub mod contrast;
 pub mod driver;

@@ -254,4 +254,7 @@ fn a_16_bit_volume_reports_means_in_its_own_units() {
         .collect();
     assert!((means[0] - 20_075.0).abs() < 10.0, "{means:?}");
     assert!((means[1] - 20_185.0).abs() < 10.0, "{means:?}");
+    // Eleven texture levels held evenly are not saturation.
+    let saturation = &report["phases"]["saturation"];
+    assert!(saturation["low"].is_null() && saturation["high"].is_null());
 }
