@@ -5,6 +5,7 @@ use super::{DscParams, DscWorkspace, SizingField};
 use crate::complex::{CellId, Complex, Rejection, VertexId};
 use crate::dim::{Dim, D2, D3};
 use crate::ops::{edge_settled, CollapseMode, ImproveMemo, SmoothScratch};
+use rayon::prelude::*;
 use serde::Serialize;
 use smallvec::SmallVec;
 
@@ -167,12 +168,18 @@ impl Connectivity for D3 {
         _memo: &mut ImproveMemo,
     ) -> usize {
         let mut flips = 0;
+        let mut poor = complex.take_list();
         for _sweep in 0..4 {
             let mut changed = 0;
-            for &c in region.cells(complex) {
-                if !complex.is_alive(c) || complex.quality(c) >= params.low_quality {
-                    continue;
-                }
+            // (flips move no vertex, so a tet's quality, read before the
+            // sweep, holds while it lives)
+            cells_below_quality(
+                complex,
+                region.cells(complex),
+                params.low_quality,
+                &mut poor,
+            );
+            for &c in &poor {
                 if complex.improve_tet(c, 0.0).is_some() {
                     changed += 1;
                 }
@@ -183,7 +190,32 @@ impl Connectivity for D3 {
             }
             region.invalidate();
         }
+        complex.give_back(poor);
         flips
+    }
+}
+
+/// Regions of fewer vertices have their stars searched for degenerate
+/// cells on one thread.
+const PARALLEL_STARS_FROM: usize = 4096;
+
+/// Regions of fewer cells are searched for poor tets on one thread.
+const PARALLEL_QUALITY_FROM: usize = 8192;
+
+/// The live cells of `cells` whose quality is below `threshold`, in their
+/// order, into `out` (on rayon's threads for a large region).
+fn cells_below_quality(
+    complex: &Complex<D3>,
+    cells: &[CellId],
+    threshold: f64,
+    out: &mut Vec<CellId>,
+) {
+    out.clear();
+    let poor = |c: &CellId| complex.is_alive(*c) && complex.quality(*c) < threshold;
+    if cells.len() < PARALLEL_QUALITY_FROM {
+        out.extend(cells.iter().copied().filter(poor));
+    } else {
+        out.par_extend(cells.par_iter().copied().filter(poor));
     }
 }
 
@@ -303,9 +335,15 @@ impl<K: Connectivity> Complex<K> {
             for &v in seeds {
                 marks[v.index()] = self.is_vertex_alive(v);
             }
-            out.extend(
-                self.cell_ids()
-                    .filter(|&c| self.cell(c).iter().any(|w| marks[w.index()])),
+            let marks = &marks[..];
+            let touches_a_seed =
+                |c: CellId| self.is_alive(c) && self.cell(c).iter().any(|w| marks[w.index()]);
+            // (in id order on any number of threads)
+            out.par_extend(
+                (0..self.cell_capacity() as u32)
+                    .into_par_iter()
+                    .map(CellId)
+                    .filter(|&c| touches_a_seed(c)),
             );
             return;
         }
@@ -338,21 +376,44 @@ impl<K: Connectivity> Complex<K> {
         walk: &mut WalkScratch,
     ) -> bool {
         self.region_vertices(cells, &mut walk.vertices, &mut walk.vertex_marks);
-        for &v in &walk.vertices {
+        let star_degenerate = |v: VertexId, star: &mut Vec<CellId>| {
+            self.star_into(v, star);
+            star.iter()
+                .any(|&c| self.is_degenerate_sized(c, params, sizing))
+        };
+        if walk.vertices.len() < PARALLEL_STARS_FROM || rayon::current_num_threads() < 2 {
+            for &v in &walk.vertices {
+                if memo.still_sound(self, v) {
+                    continue;
+                }
+                if star_degenerate(v, &mut walk.star) {
+                    return true;
+                }
+                memo.set_sound(self, v);
+            }
+            return false;
+        }
+        // Every star's answer at once (nothing changes meanwhile), then the
+        // verdicts recorded in order up to the first degenerate star, as the
+        // walk above records them.
+        let memo_now = &*memo;
+        walk.degenerate
+            .par_extend(walk.vertices.par_iter().map_init(Vec::new, |star, &v| {
+                !memo_now.still_sound(self, v) && star_degenerate(v, star)
+            }));
+        let mut found = false;
+        for (&v, &degenerate) in walk.vertices.iter().zip(&walk.degenerate) {
             if memo.still_sound(self, v) {
                 continue;
             }
-            self.star_into(v, &mut walk.star);
-            if walk
-                .star
-                .iter()
-                .any(|&c| self.is_degenerate_sized(c, params, sizing))
-            {
-                return true;
+            if degenerate {
+                found = true;
+                break;
             }
             memo.set_sound(self, v);
         }
-        false
+        walk.degenerate.clear();
+        found
     }
 
     /// The region grown by one ring: every cell sharing a vertex with `cells`.
@@ -400,10 +461,7 @@ impl<K: Connectivity> Complex<K> {
         scratch: &mut SmoothScratch<K>,
     ) -> usize {
         memo.sync(self);
-        vertices
-            .iter()
-            .filter(|&&v| self.smooth_vertex(v, scratch, memo))
-            .count()
+        self.smooth_pass(vertices, scratch, memo)
     }
 
     /// Whether a cell is degenerate by quality, measure or edge length.

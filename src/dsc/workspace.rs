@@ -88,6 +88,8 @@ pub(crate) struct WalkScratch {
     pub(super) star: Vec<CellId>,
     /// The worklist of degenerate-cell removal.
     pub(super) work: Vec<CellId>,
+    /// Per vertex of `vertices`: whether its star holds a degenerate cell.
+    pub(super) degenerate: Vec<bool>,
 }
 
 /// The buffers of a [`Region`](super::Region): its cells, their marks by

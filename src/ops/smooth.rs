@@ -1,8 +1,20 @@
 //! Laplacian smoothing of vertices off the interface.
+//!
+//! A pass over many vertices is speculated on rayon's threads: each
+//! vertex's move is computed from the positions at the start of the pass,
+//! then the pass runs in its order, taking the computed move of every vertex
+//! whose star nothing changed since (no vertex of it moved, no cell of it was
+//! replaced) and computing the others again. The moves made are those of the
+//! one-thread pass, whatever the number of threads.
 
 use super::ImproveMemo;
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::{Dim, Point};
+use rayon::prelude::*;
+
+/// Passes over fewer vertices run on one thread: the threads' start would
+/// cost more than the pass.
+const SPECULATE_FROM: usize = 4096;
 
 /// A star whose worst cell is at least this good is left alone: smoothing would
 /// barely improve it, and skipping it keeps improvement cheap where the mesh is fine.
@@ -15,6 +27,8 @@ pub struct SmoothScratch<K: Dim> {
     /// Per star cell: its corners and the index of the smoothed vertex
     /// among them (read once, then used by every test of the move).
     corners: Vec<([K::Point; 4], Option<usize>)>,
+    /// Per vertex of a speculated pass, its move computed ahead.
+    speculated: Vec<Speculated<K::Point>>,
 }
 
 impl<K: Dim> Default for SmoothScratch<K> {
@@ -22,8 +36,20 @@ impl<K: Dim> Default for SmoothScratch<K> {
         SmoothScratch {
             star: Vec::new(),
             corners: Vec::new(),
+            speculated: Vec::new(),
         }
     }
+}
+
+/// What smoothing a vertex would do, computed ahead of a pass.
+#[derive(Clone, Copy, Debug)]
+enum Speculated<P> {
+    /// Not computed: the vertex is skipped (dead, on an interface, or known to stay).
+    Skipped,
+    /// Its star is good, or no acceptable move exists.
+    Stays,
+    /// It moves there.
+    MovesTo(P),
 }
 
 /// Layer `ops`: vertex smoothing.
@@ -40,9 +66,80 @@ impl<K: Dim> Complex<K> {
         scratch: &mut SmoothScratch<K>,
         memo: &mut ImproveMemo,
     ) -> bool {
-        if !self.is_vertex_alive(v) || self.class(v).on_interface() || memo.still_kept(self, v) {
+        if self.skips_smoothing(v, memo) {
             return false;
         }
+        let target = self.smoothing_target(v, scratch);
+        self.apply_smoothing(v, target, memo)
+    }
+
+    /// Moves `v` to `target` if there is one, and records the verdict.
+    fn apply_smoothing(
+        &mut self,
+        v: VertexId,
+        target: Option<K::Point>,
+        memo: &mut ImproveMemo,
+    ) -> bool {
+        if let Some(p) = target {
+            self.set_position(v, p);
+        }
+        memo.set_kept(self, v, target.is_none());
+        target.is_some()
+    }
+
+    /// One smoothing pass over `vertices`, in their order; returns how many
+    /// moved. Many vertices are speculated in parallel (see the module's
+    /// documentation): the same moves as [`smooth_vertex`](Self::smooth_vertex)
+    /// one after the other.
+    pub(crate) fn smooth_pass(
+        &mut self,
+        vertices: &[VertexId],
+        scratch: &mut SmoothScratch<K>,
+        memo: &mut ImproveMemo,
+    ) -> usize {
+        if vertices.len() < SPECULATE_FROM || rayon::current_num_threads() < 2 {
+            return vertices
+                .iter()
+                .filter(|&&v| self.smooth_vertex(v, scratch, memo))
+                .count();
+        }
+        let start = self.move_clock();
+        let mut speculated = std::mem::take(&mut scratch.speculated);
+        vertices
+            .par_iter()
+            .map_init(SmoothScratch::default, |scratch, &v| {
+                if self.skips_smoothing(v, memo) {
+                    Speculated::Skipped
+                } else {
+                    self.smoothing_target(v, scratch)
+                        .map_or(Speculated::Stays, Speculated::MovesTo)
+                }
+            })
+            .collect_into_vec(&mut speculated);
+        let mut moved = 0;
+        for (&v, &guess) in vertices.iter().zip(speculated.iter()) {
+            if self.skips_smoothing(v, memo) {
+                continue;
+            }
+            let target = match guess {
+                Speculated::Stays if self.star_changed_at(v) <= start => None,
+                Speculated::MovesTo(p) if self.star_changed_at(v) <= start => Some(p),
+                _ => self.smoothing_target(v, scratch),
+            };
+            moved += usize::from(self.apply_smoothing(v, target, memo));
+        }
+        scratch.speculated = speculated;
+        moved
+    }
+
+    /// Whether smoothing leaves `v` alone without looking at its star.
+    fn skips_smoothing(&self, v: VertexId, memo: &ImproveMemo) -> bool {
+        !self.is_vertex_alive(v) || self.class(v).on_interface() || memo.still_kept(self, v)
+    }
+
+    /// Where smoothing moves `v`, if anywhere (see
+    /// [`smooth_vertex`](Self::smooth_vertex)); reads only.
+    fn smoothing_target(&self, v: VertexId, scratch: &mut SmoothScratch<K>) -> Option<K::Point> {
         self.star_into(v, &mut scratch.star);
         scratch.corners.clear();
         for &c in &scratch.star {
@@ -50,20 +147,22 @@ impl<K: Dim> Complex<K> {
                 .corners
                 .push((self.cell_points(c), self.local_index(c, v)));
         }
-        let moved = self.smooth_star(v, &scratch.corners);
-        memo.set_kept(self, v, !moved);
-        moved
+        self.smooth_star(v, &scratch.corners)
     }
 
     /// The smoothing move of `v` with its star's corners: see
     /// [`Complex::smooth_vertex`].
-    fn smooth_star(&mut self, v: VertexId, star: &[([K::Point; 4], Option<usize>)]) -> bool {
+    fn smooth_star(
+        &self,
+        v: VertexId,
+        star: &[([K::Point; 4], Option<usize>)],
+    ) -> Option<K::Point> {
         // Most stars are good: decide that without computing the qualities.
         if star
             .iter()
             .all(|(pts, _)| K::quality_at_least(&pts[..K::NV], GOOD_ENOUGH))
         {
-            return false;
+            return None;
         }
         let p = self.position(v);
         let at = |q: K::Point| {
@@ -88,18 +187,17 @@ impl<K: Dim> Complex<K> {
             }
         }
         if n == 0 {
-            return false;
+            return None;
         }
         let target = self.constrain(v, sum * (1.0 / n as f64));
         if (target - p).length() <= 1e-12 {
-            return false;
+            return None;
         }
         if !at(target).all(|pts| K::orient(&pts[..K::NV]) > 0.0)
             || !at(target).all(|pts| K::quality_at_least(&pts[..K::NV], before))
         {
-            return false;
+            return None;
         }
-        self.set_position(v, target);
-        true
+        Some(target)
     }
 }
