@@ -3,13 +3,18 @@
 //! iterations so the interface sits near the objects: with the uniform mesh
 //! (`--uniform`),
 //! and with the adaptive one started coarse (the 3D default).
-//! Prints the tet counts.
+//! Prints the tet counts. On the adaptive mesh, also the two per-iteration
+//! passes timed alone: the cell statistics of every tet (rasterising and
+//! summing, one thread; an iteration integrates only the tets that changed)
+//! and the edge-length summary of `report.json`.
 //! Peak memory: run the `segment3d` command under `/usr/bin/time -v`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use dsc_seg::dim::D3;
 use dsc_seg::phantom::shapes3d;
+use dsc_seg::segment::integrate::cell_stats;
 use dsc_seg::segment::{ImageView, SegmentParams, Segmentation};
+use std::hint::black_box;
 
 fn iteration_128(c: &mut Criterion) {
     let n = 128;
@@ -45,6 +50,19 @@ fn iteration_128(c: &mut Criterion) {
         group.bench_function(name, |b| {
             b.iter(|| seg.step());
         });
+        if adaptive {
+            let mesh = seg.complex();
+            group.bench_function("cell statistics of every tet, 128³, adaptive", |b| {
+                b.iter(|| {
+                    for c in mesh.cell_ids() {
+                        black_box(cell_stats::<D3>(&view, &mesh.cell_points(c)));
+                    }
+                });
+            });
+            group.bench_function("edge-length summary, 128³, adaptive", |b| {
+                b.iter(|| black_box(mesh.edge_length_summary()));
+            });
+        }
     }
     group.finish();
 }
