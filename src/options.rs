@@ -56,7 +56,8 @@ pub struct EvolutionArgs {
     /// from interfaces (up to --max-edge-length); starts from a coarse mesh.
     #[arg(long)]
     pub adaptive: bool,
-    /// Smallest target edge length of the adaptive mesh [default: 1.5]; implies --adaptive.
+    /// Smallest target edge length of the adaptive mesh, in the unit of the
+    /// edge length [default: 1.5 pixels/voxels]; implies --adaptive.
     #[arg(long, allow_hyphen_values = true)]
     pub min_edge_length: Option<f64>,
     /// Largest target edge length of the adaptive mesh [default: smallest

@@ -370,7 +370,7 @@ fn surface_segmentation<'a>(
     }
     let surface = crate::io::surface::read_surface(path)
         .map_err(|e| Error::Usage(format!("--init-surface {}: {e}", path.display())))?;
-    params.validate_dims(view.dims)?;
+    params.validate_in(view.dims, view.spacing)?;
     let l = params.resolved_edge_length(view.dims);
     let complex = complex_from_surface(&surface, view.dims, l)
         .map_err(|e| Error::Usage(format!("--init-surface {}: {e}", path.display())))?;

@@ -51,10 +51,12 @@ use serde::{Deserialize, Serialize};
 pub struct SizingParams {
     /// Whether the mesh is adaptive (`false`: the paper's uniform mesh at `L`).
     pub adaptive: bool,
-    /// Smallest target edge length `h_min` in pixels (`None`: 1.5).
+    /// Smallest target edge length `h_min`, in the image's length unit
+    /// like `L` (`None`: 1.5 sample steps).
     pub min_edge_length: Option<f64>,
-    /// Largest target edge length `h_max` in pixels (`None`: the smallest
-    /// image extent / 16 in 2D, / 10 in 3D, at least `L`).
+    /// Largest target edge length `h_max`, in the image's length unit
+    /// (`None`: the smallest image extent / 16 in 2D, / 10 in 3D, at least
+    /// `L`).
     pub max_edge_length: Option<f64>,
     /// Gradation `g`: `h(a) ≤ h(b) + g·|a − b|`, so neighbouring cells of
     /// size about `h` differ by at most a factor of about `1 + g`.
@@ -141,20 +143,26 @@ pub struct Sizes {
     pub h_max: f64,
     /// Edge length of the initial mesh (`L`, or `h_max` for a coarse start).
     pub start: f64,
+    /// The image's sample step in the same unit (1 for unit pixels/voxels):
+    /// converts lengths to sample counts where the data term counts samples.
+    pub sample_step: f64,
 }
 
 impl SizingParams {
-    /// The sizes for an image of `dims` samples (the first `n` count) and
-    /// interface edge length `l`: `h_min ≤ L ≤ h_max`.
-    pub fn sizes(&self, dims: &[usize], l: f64) -> Sizes {
-        let extent = dims.iter().copied().min().unwrap_or(1) as f64;
+    /// The sizes for an image of `dimension` axes whose smallest extent is
+    /// `extent` and whose sample step is `step` (both in the spacing's
+    /// unit: see [`sample_step`](crate::segment::params::sample_step)),
+    /// and interface edge length `l`: `h_min ≤ L ≤ h_max`. The defaults
+    /// scale with the grid, so a volume gets the same mesh whatever the
+    /// unit its voxel size is given in.
+    pub fn sizes(&self, dimension: usize, extent: f64, step: f64, l: f64) -> Sizes {
         let h_max = self
             .max_edge_length
-            .unwrap_or(extent / default_coarsening(dims.len()))
+            .unwrap_or(extent / default_coarsening(dimension))
             .max(l);
         let h_min = self
             .min_edge_length
-            .unwrap_or(DEFAULT_MIN_EDGE_LENGTH)
+            .unwrap_or(DEFAULT_MIN_EDGE_LENGTH * step)
             .min(l);
         let h_max = h_max.min(extent);
         Sizes {
@@ -162,6 +170,7 @@ impl SizingParams {
             interface: l,
             h_max,
             start: if self.coarse_start { h_max } else { l },
+            sample_step: step,
         }
     }
 
@@ -273,7 +282,9 @@ impl AdaptiveSizing {
         self.new_requests = 0;
         self.noise_variance = noise_variance(complex, cells);
         let gap = smallest_gap(phases);
-        let smallest_cell = K::regular_measure(self.sizes.h_min).max(1.0);
+        // In samples, as the residuals count them.
+        let step = self.sizes.sample_step;
+        let smallest_cell = K::regular_measure(self.sizes.h_min / step).max(1.0);
         let mut field = self.field.clone();
         field.fill(self.sizes.h_max);
         for c in complex.cell_ids() {
@@ -301,7 +312,7 @@ impl AdaptiveSizing {
             // face is many voxels, and with that bound the coarse-to-fine
             // start lost accuracy, so 3D asks for a smallest cell.
             let floor = if on_interface && K::N == 2 {
-                longest
+                longest / step
             } else {
                 smallest_cell
             };

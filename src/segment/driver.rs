@@ -9,7 +9,7 @@ use super::integrate::{CellCache, CellStats, PhaseStats};
 use super::intensity::IntensityStats;
 use super::model::{Flow, IterationState, Models};
 use super::models::{GivenMesh, PaperField};
-use super::params::{contrast_edge_length, SegmentParams};
+use super::params::{contrast_edge_length, sample_step, smallest_extent, SegmentParams};
 use super::raster::Raster;
 use super::reseed::{any_lost, lost_phases, merge_phase, split_most_structured_phase, LostPhase};
 use super::thresholds::smallest_class_gap;
@@ -277,7 +277,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 K::SMALLEST_GRID,
             ));
         }
-        params.validate_dims(image.dims)?;
+        params.validate_in(image.dims, image.spacing)?;
         params.check_shapes_inside(image.extent())?;
         let range = image.range().ok_or(SegmentError::NonFinite)?;
         if range.1 - range.0 <= 0.0 {
@@ -293,7 +293,13 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let intensity = IntensityStats::of(&image);
         let l = Self::edge_length(&params, &image, &intensity);
         let dsc = DscParams::new::<K>(l);
-        let sizes = (params.sizing.adaptive).then(|| params.sizing.sizes(&image.dims[..K::N], l));
+        let sizes = (params.sizing.adaptive).then(|| {
+            let (extent, step) = (
+                smallest_extent(image.dims, image.spacing),
+                sample_step(image.dims, image.spacing),
+            );
+            params.sizing.sizes(K::N, extent, step, l)
+        });
         let given = models.init.start_mesh();
         let refinements = match (&given, sizes) {
             (None, Some(sizes)) if sizes.start > sizes.interface => params.sizing.start_refinements,

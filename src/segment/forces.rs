@@ -102,7 +102,8 @@ pub struct ForceSettings {
     pub model: ForceModel,
     /// Triple-junction force (eq. 7 as the paper states it, or per edge).
     pub junction: JunctionForce,
-    /// Sample spacing along facets (pixels).
+    /// Sample spacing along facets, in samples (pixels/voxels; scaled by the
+    /// image's sample step, so the work does not depend on the length unit).
     pub spacing: f64,
     /// Mean gaps below this count as equal means: no region force across them.
     pub equal_means: f64,
@@ -385,7 +386,8 @@ impl<K: Raster> ForceField<K> {
             return; // equal means: eq. (6) undefined, no region force
         }
         let (acc, kinds) = (&mut self.acc, &self.kinds);
-        K::facet_samples(&cpts[..nf], s.spacing, &mut |p, w, ds| {
+        let spacing = s.spacing * image.sample_step();
+        K::facet_samples(&cpts[..nf], spacing, &mut |p, w, ds| {
             let intensity = K::sample(image, p);
             let f = match s.model {
                 ForceModel::Normalised => (2.0 * intensity - ma - mb) / gap,

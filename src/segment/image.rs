@@ -50,6 +50,12 @@ impl<'a> ImageView<'a> {
             .then_some(ImageView { spacing, ..self })
     }
 
+    /// The size of one sample step ([`sample_step`](super::params::sample_step)):
+    /// lengths counted in samples are this many units of the spacing.
+    pub fn sample_step(&self) -> f64 {
+        super::params::sample_step(self.dims, self.spacing)
+    }
+
     /// The domain's extent along each axis (`dims · spacing`).
     pub fn extent(&self) -> [f64; 3] {
         std::array::from_fn(|a| self.dims[a] as f64 * self.spacing[a])

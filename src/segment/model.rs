@@ -95,7 +95,7 @@ impl IterationState<'_, '_> {
     /// A force integrated over the interface facets of `complex`, the route
     /// of the paper's region force: every interface facet between phases `a`
     /// (one side) and `b` (the other) is sampled about every
-    /// [`SegmentParams::sample_spacing`] pixels; the scalar `f(point, a, b)`
+    /// [`SegmentParams::sample_spacing`] pixels/voxels; the scalar `f(point, a, b)`
     /// of each sample, times the facet's unit normal `N_ab` (pointing from
     /// `a` into `b`), is spread over the facet's corners with the hat
     /// weights, and each vertex's total is divided by its hat-weighted share
@@ -117,21 +117,18 @@ impl IterationState<'_, '_> {
         scratch.clear();
         scratch.resize(out.len(), (K::Point::zero(), 0.0));
         let n = K::N;
+        let spacing = self.params.sample_spacing * self.image.sample_step();
         for facet in complex.interface_facets() {
             let (a, b, normal, corners) = (facet.a, facet.b, facet.normal, facet.corners);
-            K::facet_samples(
-                &facet.points[..n],
-                self.params.sample_spacing,
-                &mut |p, w, ds| {
-                    let v = f(p, a, b);
-                    for k in 0..n {
-                        let wk = w[k] * ds;
-                        let acc = &mut scratch[corners[k].index()];
-                        acc.0 += normal * (v * wk);
-                        acc.1 += wk;
-                    }
-                },
-            );
+            K::facet_samples(&facet.points[..n], spacing, &mut |p, w, ds| {
+                let v = f(p, a, b);
+                for k in 0..n {
+                    let wk = w[k] * ds;
+                    let acc = &mut scratch[corners[k].index()];
+                    acc.0 += normal * (v * wk);
+                    acc.1 += wk;
+                }
+            });
         }
         for (o, &(sum, share)) in out.iter_mut().zip(scratch.iter()) {
             if share > 0.0 {

@@ -204,7 +204,8 @@ pub struct SegmentParams {
     /// persist at lower weights); in 3D 0.6 and 1.2
     /// ([`new_3d`](Self::new_3d)). Evidence: `docs/parameters.md`.
     pub length_weight: f64,
-    /// Spacing of the samples along interface facets, in pixels.
+    /// Spacing of the samples along interface facets, in pixels/voxels
+    /// (sample steps, whatever the voxel size's unit).
     pub sample_spacing: f64,
     /// Adaptive resolution (off: the paper's uniform mesh at `L`).
     #[serde(default)]
@@ -288,8 +289,16 @@ impl SegmentParams {
     }
 
     /// [`validate`](Self::validate) for an image or volume of `dims` samples
-    /// (`dims[2] == 1` for a 2D image).
+    /// (`dims[2] == 1` for a 2D image) of unit size.
     pub fn validate_dims(&self, dims: [usize; 3]) -> Result<(), SegmentError> {
+        self.validate_in(dims, [1.0; 3])
+    }
+
+    /// [`validate`](Self::validate) for an image or volume of `dims` samples
+    /// of size `spacing` (`dims[2] == 1` for a 2D image): the edge length is
+    /// in the spacing's unit, at least one sample step ([`sample_step`]) and
+    /// at most the smallest extent.
+    pub fn validate_in(&self, dims: [usize; 3], spacing: [f64; 3]) -> Result<(), SegmentError> {
         let [width, height, depth] = dims;
         if self.phases < 2 || self.phases > MAX_PHASES {
             return Err(SegmentError::Phases(self.phases));
@@ -305,7 +314,9 @@ impl SegmentParams {
             }
         }
         if let Some(l) = self.edge_length {
-            let max = dims.iter().filter(|&&d| d > 1).copied().min().unwrap_or(1) as f64;
+            let unit = if spacing == [1.0; 3] { " px" } else { "" };
+            let max = smallest_extent(dims, spacing);
+            let step = sample_step(dims, spacing);
             if !(l.is_finite() && l > 0.0) {
                 return Err(SegmentError::EdgeLength(
                     l,
@@ -315,13 +326,20 @@ impl SegmentParams {
             if l > max {
                 return Err(SegmentError::EdgeLength(
                     l,
-                    format!("must not exceed the image's smaller side ({max} px)"),
+                    format!(
+                        "must not exceed the image's smaller side ({}{unit})",
+                        max as f32
+                    ),
                 ));
             }
-            if l < 1.0 {
+            if l < step {
                 return Err(SegmentError::EdgeLength(
                     l,
-                    "must be at least 1 pixel".into(),
+                    if unit.is_empty() {
+                        format!("must be at least 1 pixel step ({})", step as f32)
+                    } else {
+                        "must be at least 1 pixel".into()
+                    },
                 ));
             }
         }
@@ -496,17 +514,8 @@ impl SegmentParams {
         if self.edge_length.is_some() || spacing == [1.0; 3] {
             return self.resolved_edge_length(dims);
         }
-        let axes: Vec<usize> = (0..3).filter(|&a| dims[a] > 1).collect();
-        let step = axes
-            .iter()
-            .map(|&a| spacing[a])
-            .product::<f64>()
-            .powf(1.0 / axes.len().max(1) as f64);
-        let side = axes
-            .iter()
-            .map(|&a| dims[a] as f64 * spacing[a] / step)
-            .fold(f64::INFINITY, f64::min);
-        let side = side.max(1.0) as usize;
+        let step = sample_step(dims, spacing);
+        let side = (smallest_extent(dims, spacing) / step).max(1.0) as usize;
         default_edge_length(side, side, self.phases) * step
     }
 
@@ -545,6 +554,28 @@ fn one() -> usize {
 
 fn yes() -> bool {
     true
+}
+
+/// The size of one sample step of a grid of `dims` samples of size
+/// `spacing`: the geometric mean of the sizes along the axes with more
+/// than one sample (1 for unit samples). Lengths given in samples (the
+/// default edge lengths, the smallest adaptive cell) are this many units.
+pub fn sample_step(dims: [usize; 3], spacing: [f64; 3]) -> f64 {
+    let axes: Vec<usize> = (0..3).filter(|&a| dims[a] > 1).collect();
+    axes.iter()
+        .map(|&a| spacing[a])
+        .product::<f64>()
+        .powf(1.0 / axes.len().max(1) as f64)
+}
+
+/// The smallest extent (`dims · spacing`) over the axes with more than one
+/// sample, in the spacing's unit.
+pub fn smallest_extent(dims: [usize; 3], spacing: [f64; 3]) -> f64 {
+    (0..3)
+        .filter(|&a| dims[a] > 1)
+        .map(|a| dims[a] as f64 * spacing[a])
+        .fold(f64::INFINITY, f64::min)
+        .min(f64::MAX)
 }
 
 /// The default average edge length for `phases` phases: `min(W, H) / 64 ·

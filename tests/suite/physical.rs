@@ -113,3 +113,49 @@ fn an_anisotropic_flipped_nifti_ball_is_round_in_millimetres_and_keeps_its_geome
     assert!((ez - ex).abs() < 2.0 && (ey - ex).abs() < 2.0, "extents");
     assert!(spread <= 0.10, "radius spread {spread}");
 }
+
+/// The same volume with its voxel size given in different units (a
+/// micro-CT in millimetres or micrometres): the mesh is sized in voxels, so
+/// every run builds about the same mesh and gives the same labels, where
+/// sizes fixed in absolute units once refused the small unit and built
+/// billions of cells for the large one.
+#[test]
+fn the_mesh_and_labels_do_not_depend_on_the_unit_of_the_voxel_size() {
+    use dsc_seg::dim::D3;
+    use dsc_seg::segment::{ImageView, Segmentation};
+    let dims = [28, 24, 20];
+    let centre = [13.0, 11.5, 9.5];
+    let data: Vec<f32> = (0..dims[2])
+        .flat_map(|k| (0..dims[1]).flat_map(move |j| (0..dims[0]).map(move |i| [i, j, k])))
+        .map(|[i, j, k]| {
+            let p = [i as f64, j as f64, k as f64];
+            if distance(p, centre) < 7.0 {
+                0.8
+            } else {
+                0.2
+            }
+        })
+        .collect();
+    let run = |unit: f64| {
+        let view = ImageView::new_3d(dims, &data)
+            .unwrap()
+            .with_spacing([unit, 1.5 * unit, unit])
+            .unwrap();
+        let mut params = SegmentParams::new_3d(2);
+        params.max_iterations = 30;
+        let mut seg = Segmentation::<D3>::new(view, params).unwrap();
+        seg.run(|_| {});
+        (seg.complex().cell_count(), seg.label_image())
+    };
+    let (cells, labels) = run(1.0);
+    for unit in [1e-3, 1e3] {
+        let (c, l) = run(unit);
+        let agree = l.iter().zip(&labels).filter(|(a, b)| a == b).count() as f64;
+        let agree = agree / labels.len() as f64;
+        assert!(
+            (c as f64 / cells as f64 - 1.0).abs() < 0.05,
+            "voxel unit {unit}: {c} cells against {cells}"
+        );
+        assert!(agree > 0.99, "voxel unit {unit}: labels agree on {agree}");
+    }
+}
