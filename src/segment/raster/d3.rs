@@ -450,14 +450,14 @@ impl RowCutter {
 #[inline]
 fn ceil_index(v: f64) -> i64 {
     let t = v as i64;
-    t + i64::from((t as f64) < v)
+    t.saturating_add(i64::from((t as f64) < v))
 }
 
 /// `⌊v⌋` as an index (saturating at the ends of `i64`), without a libm call.
 #[inline]
 fn floor_index(v: f64) -> i64 {
     let t = v as i64;
-    t - i64::from((t as f64) > v)
+    t.saturating_sub(i64::from((t as f64) > v))
 }
 
 /// One quadrature point of a triangle: position, barycentric weights of the
@@ -755,6 +755,18 @@ mod tests {
                 assert_eq!(fast, brute, "tet {t:?}, spacing {spacing:?}");
                 tested += 1;
             }
+        }
+    }
+
+    #[test]
+    fn index_rounding_matches_floor_and_ceil_and_saturates() {
+        for v in [-2.5, -2.0, -0.5, -0.0, 0.0, 0.3, 1.0, 7.999, 1e13 + 0.5] {
+            assert_eq!(ceil_index(v), v.ceil() as i64, "{v}");
+            assert_eq!(floor_index(v), v.floor() as i64, "{v}");
+        }
+        for v in [f64::INFINITY, 1e300] {
+            assert_eq!((ceil_index(v), floor_index(v)), (i64::MAX, i64::MAX));
+            assert_eq!((ceil_index(-v), floor_index(-v)), (i64::MIN, i64::MIN));
         }
     }
 
