@@ -154,10 +154,10 @@ pub fn tet_voxels(
 /// condition along a row is a half-line (the tie rule depends on the facet
 /// only), so the owned centres of a row are contiguous. A small tet's rows
 /// are scanned centre by centre, each facet's orientation evaluated in
-/// floating point with a certified error bound ([`FilteredFacet::inner`],
+/// floating point with a certified error bound (`FilteredFacet::inner`,
 /// exact near the plane), a row stopping at its first centre outside after
 /// one inside. A larger tet's rows are cut by the facet planes directly
-/// ([`RowCutter`]): where each plane crosses the row is computed in floating
+/// (`RowCutter`): where each plane crosses the row is computed in floating
 /// point with an error bound, the centres beyond the bounds are inside, and
 /// only a centre within the bound of a plane (on it, say) is tested exactly.
 /// Integration spends most of its time here.
