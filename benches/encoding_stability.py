@@ -55,7 +55,13 @@ def segment(path, phases, extra, out):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True)
+    ap.add_argument("--modes", nargs="*", choices=list(MODES), default=list(MODES))
+    ap.add_argument("--edge-lengths", type=float, nargs="*", default=[],
+                    help="also the default with these interface edge lengths L (voxels)")
     a = ap.parse_args()
+    modes = {m: MODES[m] for m in a.modes}
+    for length in a.edge_lengths:
+        modes[f"default, L = {length:g}"] = ["--edge-length", str(length)]
     os.makedirs(a.out, exist_ok=True)
     print("| volume | mode | re-encoding | Dice vs 8-bit run | Dice vs truth (8-bit run's) |")
     print("|---|---|---|---|---|")
@@ -66,13 +72,14 @@ def main():
         eight = os.path.join(data, name + ".tif")
         truth = tifffile.imread(os.path.join(data, name + "_labels.tif"))
         volume = tifffile.imread(eight).astype(np.float64)
-        for mode, extra in MODES.items():
-            base = segment(eight, phases, extra, os.path.join(data, f"{mode}_8bit"))
+        for mode, extra in modes.items():
+            tag = mode.replace(", ", "_").replace(" = ", "")
+            base = segment(eight, phases, extra, os.path.join(data, f"{tag}_8bit"))
             base_truth = mean_dice(base, truth, phases)
             for what, encoded in encodings(volume).items():
                 path = os.path.join(data, f"{what.replace(' ', '_')}.tif")
                 tifffile.imwrite(path, encoded)
-                labels = segment(path, phases, extra, os.path.join(data, f"{mode}_{what}"))
+                labels = segment(path, phases, extra, os.path.join(data, f"{tag}_{what}"))
                 print(f"| {name}_{n} | {mode} | {what} | {mean_dice(labels, base, phases):.4f} "
                       f"| {mean_dice(labels, truth, phases):.4f} ({base_truth:.4f}) |")
 

@@ -1,8 +1,11 @@
 //! The labels do not depend on how the intensities are encoded: the
 //! phantoms as 8-bit PNG, 16-bit PNG with 64 levels, 16-bit PNG offset by
 //! 20000, float32 TIFF in shifted units and negated float32 TIFF give the same
-//! segmentation (mean Dice ≥ 0.99 between runs), in 2D and in 3D; a 16-bit
-//! volume's report gives its phase means in the file's units.
+//! segmentation (mean Dice ≥ 0.99 between runs), in 2D and in 3D, but for
+//! the lossy 64 levels in 3D with the default interface size, which must be
+//! as accurate (and the same on the uniform mesh or with interfaces 1.5
+//! voxels fine); a 16-bit volume's report gives its phase means in the
+//! file's units.
 
 use dsc_seg::io::{Image2, SampleType};
 use dsc_seg::phantom::{shapes3d, Phantom2Kind};
@@ -202,6 +205,30 @@ fn a_3d_phantom_with_64_levels_gives_the_same_labels_on_the_uniform_mesh() {
         .collect();
     let base = labels_3d_with(&eight, n, uniform_3d());
     let labels = labels_3d_with(&levels64, n, uniform_3d());
+    assert!(mean_dice(&base, &ph.truth, 2) > 0.97);
+    let dice = mean_dice(&labels, &base, 2);
+    assert!(
+        dice >= 0.99,
+        "Dice {dice} between the 64-level and the 8-bit run"
+    );
+}
+
+/// With the 3D default at interfaces 1.5 voxels fine (`--edge-length 1.5`)
+/// the 64-level re-encoding gives the 8-bit run's labels too: two runs that
+/// part converge to optima closer together the finer the interface cells
+/// (Dice 0.996 here, 0.988 at the default 3).
+#[test]
+fn a_3d_phantom_with_64_levels_gives_the_same_labels_with_fine_interfaces() {
+    let n = 48;
+    let (ph, bytes, eight) = torus_as_8_bit(n);
+    let levels64: Vec<f32> = bytes
+        .iter()
+        .map(|&b| (b as f32 * 63.0 / 255.0).round() / 65535.0)
+        .collect();
+    let mut fine = SegmentParams::new_3d(2);
+    fine.edge_length = Some(1.5);
+    let base = labels_3d_with(&eight, n, fine.clone());
+    let labels = labels_3d_with(&levels64, n, fine);
     assert!(mean_dice(&base, &ph.truth, 2) > 0.97);
     let dice = mean_dice(&labels, &base, 2);
     assert!(
