@@ -8,8 +8,10 @@ use super::image::ImageView;
 use super::integrate::{CellCache, CellStats, PhaseStats};
 use super::intensity::IntensityStats;
 use super::model::{Flow, IterationState, Models};
-use super::models::{GivenMesh, PaperField};
-use super::params::{contrast_edge_length, sample_step, smallest_extent, SegmentParams};
+use super::models::{GivenMesh, PaperField, Rigidity};
+use super::params::{
+    contrast_edge_length, contrast_rigidity, sample_step, smallest_extent, SegmentParams,
+};
 use super::raster::Raster;
 use super::reseed::{any_lost, lost_phases, merge_phase, split_most_structured_phase, LostPhase};
 use super::thresholds::smallest_class_gap;
@@ -151,6 +153,10 @@ pub struct SegmentReport {
     /// Length weight ν used in the energy and flip guard (intensity² per
     /// pixel of length, in the input's units).
     pub length_weight_abs: f64,
+    /// The rigidity β the bending term used: in 2D the parameter weighed
+    /// against the image's noise ([`contrast_rigidity`]); `None` without a
+    /// rigidity term.
+    pub rigidity: Option<f64>,
     /// The input's intensity figures (range, robust range, noise estimate).
     pub intensity: IntensityStats,
     /// The thresholds of the initialisation, in the input's units: the
@@ -291,7 +297,11 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             });
         }
         let intensity = IntensityStats::of(&image);
-        let l = Self::edge_length(&params, &image, &intensity);
+        let gap = Self::class_gap(&params, &image, &intensity);
+        let l = Self::edge_length(&params, &image, &intensity, gap);
+        if let (Some(gap), Some(rigidity)) = (gap, models.force_mut::<Rigidity<K>>()) {
+            rigidity.beta = contrast_rigidity(rigidity.beta, intensity.noise, gap);
+        }
         let dsc = DscParams::new::<K>(l);
         let sizes = (params.sizing.adaptive).then(|| {
             let (extent, step) = (
@@ -420,23 +430,38 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
     }
 
+    /// In 2D, the smallest gap between the class means of the least-variance
+    /// split of the pixels' histogram, the contrast that the noise is weighed
+    /// against for the edge length and the rigidity; `None` in 3D, which
+    /// keeps both as given.
+    fn class_gap(
+        params: &SegmentParams,
+        image: &ImageView<'_>,
+        intensity: &IntensityStats,
+    ) -> Option<f64> {
+        if K::N != 2 {
+            return None;
+        }
+        smallest_class_gap(&intensity.histogram(image), params.phases)
+    }
+
     /// The edge length L: the parameter's if given; else the size default,
     /// in 2D shortened for an image whose noise is small against the
-    /// contrast between its phases ([`contrast_edge_length`], the contrast
-    /// from the least-variance split of the pixels' histogram). 3D keeps the
-    /// size default.
+    /// contrast `gap` between its phases ([`contrast_edge_length`], the
+    /// contrast from [`class_gap`](Self::class_gap)). 3D keeps the size
+    /// default.
     fn edge_length(
         params: &SegmentParams,
         image: &ImageView<'_>,
         intensity: &IntensityStats,
+        gap: Option<f64>,
     ) -> f64 {
         let l = params.resolved_edge_length_in(image.dims, image.spacing);
-        if params.edge_length.is_some() || K::N != 2 {
-            return l;
-        }
-        match smallest_class_gap(&intensity.histogram(image), params.phases) {
-            Some(gap) => contrast_edge_length(l, intensity.noise, gap),
-            None => l,
+        match gap {
+            Some(gap) if params.edge_length.is_none() => {
+                contrast_edge_length(l, intensity.noise, gap)
+            }
+            _ => l,
         }
     }
 
@@ -631,13 +656,23 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 self.stalled = 0;
             }
         }
-        if flips == 0 && rec.max_displacement < self.params.converge_displacement {
+        if flips == 0 && self.settled(rec.max_displacement) {
             self.quiet_iterations += 1;
         } else {
             self.quiet_iterations = 0;
         }
         self.history.push(rec.clone());
         rec
+    }
+
+    /// Whether a step whose largest displacement was `max_displacement` (a
+    /// fraction of L) moved little enough to count towards convergence:
+    /// below [`converge_displacement`](SegmentParams::converge_displacement)
+    /// and, if set, [`converge_pixels`](SegmentParams::converge_pixels).
+    fn settled(&self, max_displacement: f64) -> bool {
+        let pixels = max_displacement * self.dsc.edge_length;
+        max_displacement < self.params.converge_displacement
+            && self.params.converge_pixels.is_none_or(|p| pixels < p)
     }
 
     /// What the next [`step`](Self::step) does before it deforms, without
@@ -925,6 +960,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             final_means: self.phases.mean.clone(),
             final_energy,
             length_weight_abs: self.nu,
+            rigidity: self.models.force::<Rigidity<K>>().map(|r| r.beta),
             intensity: self.intensity.clone(),
             initial_thresholds: self.initial_thresholds.clone(),
             reseeds: self.reseeds,

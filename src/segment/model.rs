@@ -425,6 +425,13 @@ impl<K: Raster> Models<K> {
         self
     }
 
+    /// The first force term of type `T`.
+    pub fn force<T: 'static>(&self) -> Option<&T> {
+        self.forces
+            .iter()
+            .find_map(|f| f.as_ref().as_any().downcast_ref::<T>())
+    }
+
     /// The first force term of type `T`, for changing it mid-run.
     pub fn force_mut<T: 'static>(&mut self) -> Option<&mut T> {
         self.forces

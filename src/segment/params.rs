@@ -11,6 +11,10 @@ pub const MAX_PHASES: usize = 64;
 /// not reached a new low for this many iterations.
 pub const PLATEAU_ITERATIONS: usize = 10;
 
+/// The 2D default of [`SegmentParams::converge_pixels`]: a run has converged
+/// once no vertex moves more than a twentieth of a pixel per iteration.
+pub const CONVERGE_PIXELS: f64 = 0.05;
+
 /// The 2D sizing field freezes once the energy has not reached a new low
 /// for this many iterations (half the plateau: the last iterations polish
 /// the interfaces on a fixed mesh size).
@@ -158,9 +162,11 @@ pub struct SegmentParams {
     /// Weight β of the rigidity term of eq. (2), dimensionless, relative to
     /// the normalised region force (the bending term `−Δ²X`, in pixels, is
     /// divided by L). Default 5: a zig-zag of amplitude `a` feels `20·a/L`,
-    /// a circle of radius R ≫ L only `≈ 5·L³/(4R⁴)`. The driver splits the
-    /// bending step into stable sub-steps, so β means the same at every step
-    /// size. Evidence for the default: `docs/parameters.md`.
+    /// a circle of radius R ≫ L only `≈ 5·L³/(4R⁴)`. In 2D the driver
+    /// raises it in proportion to the force noise `2σ̂/Δ` where that exceeds 1
+    /// ([`contrast_rigidity`]). The driver splits the bending step
+    /// into stable sub-steps, so β means the same at every step size.
+    /// Evidence for the default: `docs/parameters.md`.
     pub rigidity: f64,
     /// Weight α of the elasticity term of eq. (2); 0 by default, as the paper
     /// argues (the DSC keeps the curve's sampling itself).
@@ -174,6 +180,12 @@ pub struct SegmentParams {
     pub step_fraction: f64,
     /// Converged when the largest displacement stays below this fraction of L ...
     pub converge_displacement: f64,
+    /// ... and, if set, below this many pixels (2D default 0.05; `None` in
+    /// 3D). Dice counts pixels, not fractions of L: at 0.02·L alone a 512²
+    /// image (L = 8) stopped while its corners still filled in by 0.13 px
+    /// per iteration, with a third of its wrong pixels at the corners.
+    #[serde(default)]
+    pub converge_pixels: Option<f64>,
     /// ... and nothing flips, for this many iterations in a row.
     pub converge_iterations: usize,
     /// Also converged when the energy has not reached a new low (lower than
@@ -232,6 +244,7 @@ impl SegmentParams {
             elasticity: 0.0,
             step_fraction: 0.2,
             converge_displacement: 0.02,
+            converge_pixels: Some(CONVERGE_PIXELS),
             converge_iterations: 5,
             converge_plateau: None,
             length_weight: if phases == 2 { 1.6 } else { 5.5 },
@@ -273,6 +286,7 @@ impl SegmentParams {
             length_weight: if phases == 2 { 0.6 } else { 1.2 },
             flip_interval: 20,
             flip_once: true,
+            converge_pixels: None,
             converge_plateau: Some(PLATEAU_ITERATIONS),
             sizing: SizingParams {
                 adaptive: true,
@@ -376,6 +390,9 @@ impl SegmentParams {
             self.converge_displacement >= 0.0,
             non_negative,
         )?;
+        if let Some(pixels) = self.converge_pixels {
+            check("converge_pixels", pixels, pixels >= 0.0, non_negative)?;
+        }
         check(
             "length_weight",
             self.length_weight,
@@ -633,6 +650,27 @@ pub fn contrast_edge_length(size_default: f64, noise: f64, gap: f64) -> f64 {
     scaled.max(SMALLEST_CONTRAST_EDGE_LENGTH.min(size_default))
 }
 
+/// The 2D rigidity for an image whose noise `noise` (σ̂) is `noise/gap` of
+/// the smallest gap between its phase means: β where the noise of the
+/// normalised region force of eq. (6) per pixel, `2σ̂/Δ`, is at most 1 (as
+/// strong as the push of a pixel at a phase mean; σ̂ = 0.2 on the two-phase
+/// benchmark phantom), and β times that noise where it is more.
+///
+/// The bending term holds down the wiggles that noise drives, so past the
+/// point where the noise outweighs a phase mean's push it grows with it
+/// (the piecewise-constant MAP weight grows with σ² in the same way). It
+/// is not lowered on cleaner images: bending is also what resolves a
+/// two-phase crossing (no region force acts there) and keeps thin
+/// structures on a coarse mesh, and a weight falling with the noise left
+/// the checkerboard crossing of the paper's Fig. 2 unresolved.
+pub fn contrast_rigidity(rigidity: f64, noise: f64, gap: f64) -> f64 {
+    if !(gap > 0.0 && noise.is_finite()) {
+        return rigidity;
+    }
+    let force_noise = 2.0 * noise / gap;
+    rigidity * force_noise.max(1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -649,6 +687,19 @@ mod tests {
         assert_eq!(contrast_edge_length(3.0, 0.0, 0.2), 3.0);
         // no gap known: the size default
         assert_eq!(contrast_edge_length(8.0, 0.01, 0.0), 8.0);
+    }
+
+    #[test]
+    fn contrast_rigidity_grows_with_the_force_noise() {
+        // the force's noise per pixel reaches a phase mean's push: β
+        assert_eq!(contrast_rigidity(5.0, 0.2, 0.4), 5.0);
+        // noisier: in proportion
+        assert!((contrast_rigidity(5.0, 0.3, 0.4) - 7.5).abs() < 1e-12);
+        // cleaner: still β
+        assert_eq!(contrast_rigidity(5.0, 0.05, 0.4), 5.0);
+        assert_eq!(contrast_rigidity(5.0, 0.0, 0.4), 5.0);
+        // no gap known: β
+        assert_eq!(contrast_rigidity(5.0, 0.01, 0.0), 5.0);
     }
 
     #[test]
