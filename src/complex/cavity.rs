@@ -75,6 +75,8 @@ enum Reclassify {
     AllCorners,
     /// Only the vertices the new cells add (the label field is kept).
     NewVertices,
+    /// None (the label field is kept; the caller classifies a vertex it moved).
+    Nothing,
 }
 
 type Outside = SmallVec<[(FacetKey, Option<CellId>, bool); INLINE]>;
@@ -150,13 +152,27 @@ impl<K: Dim> Complex<K> {
     /// has a repeated vertex has degenerated and vanishes, and two that then
     /// coincide are glued to each other (a facet outside the cavity may thereby
     /// become a domain-boundary facet).
+    ///
+    /// `inside_one_phase`: the removed and the kept vertex are both off every
+    /// interface and the removed one off the domain boundary, so their stars
+    /// carry one label, and so does their union before and after (bounded by
+    /// the same facets, none renamed): the label field is kept,
+    /// and of all the vertices only the kept one, which moved, is classified
+    /// again (by the caller, once it is in place). Otherwise every corner of
+    /// the new cells is.
     pub(crate) fn replace_cells_merging(
         &mut self,
         old: &[CellId],
         new: &[(K::Cell, Label)],
-        merge: Option<(VertexId, VertexId)>,
+        merge: (VertexId, VertexId),
+        inside_one_phase: bool,
     ) -> Result<(), Rejection> {
-        self.replace_cells_then(old, new, merge, Reclassify::AllCorners)
+        let reclassify = if inside_one_phase {
+            Reclassify::Nothing
+        } else {
+            Reclassify::AllCorners
+        };
+        self.replace_cells_then(old, new, Some(merge), reclassify)
     }
 
     /// The replacement, then the classes of the vertices `reclassify` names.
@@ -316,6 +332,7 @@ impl<K: Dim> Complex<K> {
                     .collect();
                 self.reclassify_vertices(&mut added);
             }
+            Reclassify::Nothing => {}
         }
         Ok(())
     }

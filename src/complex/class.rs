@@ -204,7 +204,7 @@ impl<K: Dim> Complex<K> {
     }
 
     /// Recomputes the class of each listed vertex once (sorts the list).
-    pub(super) fn reclassify_vertices(&mut self, vertices: &mut [VertexId]) {
+    pub(crate) fn reclassify_vertices(&mut self, vertices: &mut [VertexId]) {
         vertices.sort_unstable();
         // (the 2D pieces are counted by a walk around the fan, without a star)
         let mut star = if K::STAR_IS_FAN {

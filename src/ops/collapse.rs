@@ -190,11 +190,26 @@ impl<K: Dim> Complex<K> {
                 (cell, self.label(c))
             })
             .collect();
+        // (a removed vertex off the domain boundary: no facet is renamed or
+        // glued, the cavity's boundary is the link of the removed vertex)
+        let removed = self.class(cand.remove);
+        let inside_one_phase = !self.class(cand.keep).on_interface()
+            && !removed.on_interface()
+            && !removed.on_boundary();
         let old_pos = self.position(cand.keep);
         self.set_position(cand.keep, cand.at);
-        let result = self.replace_cells_merging(star_remove, &new, Some((cand.remove, cand.keep)));
+        let result = self.replace_cells_merging(
+            star_remove,
+            &new,
+            (cand.remove, cand.keep),
+            inside_one_phase,
+        );
         if result.is_err() {
             self.set_position(cand.keep, old_pos);
+        } else if inside_one_phase {
+            // Every label around is one phase's: only the kept vertex's
+            // boundary mask (its position) may have changed.
+            self.reclassify_vertices(&mut [cand.keep]);
         } else {
             // The kept vertex moved: its whole star may change class (boundary mask).
             self.star_into(cand.keep, star);
