@@ -24,7 +24,9 @@ pub struct EvolutionArgs {
     /// Try label flips every K iterations [default: 1 in 2D, 20 in 3D].
     #[arg(long, value_name = "K")]
     pub flip_interval: Option<usize>,
-    /// Rigidity weight β of eq. (2).
+    /// Rigidity weight β of eq. (2). In 2D it is raised in proportion to the
+    /// image's force noise 2σ̂/Δ where that exceeds 1 (report.json gives the
+    /// weight used).
     #[arg(long, allow_hyphen_values = true)]
     pub rigidity: Option<f64>,
     /// Elasticity weight α of eq. (2) (off by default, as in the paper).
