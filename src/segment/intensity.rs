@@ -174,10 +174,21 @@ impl Histogram {
         h
     }
 
-    /// Adds `count` samples with the given sums to the bin of `at`; values
-    /// outside the range count in the end bins.
+    /// Adds `count` samples with the given sums to the bin of `at`. Samples
+    /// at a value outside the range count in the end bins as if they were
+    /// at the range's end (winsorised): the class means and variances the
+    /// thresholds are chosen by then stay within the range, where one
+    /// saturated pixel of a 16-bit image that uses a small part of its range
+    /// would otherwise hold most of the variance and take a class to itself.
     pub fn add(&mut self, at: f64, count: f64, sum: f64, sum_sq: f64) {
         let bins = self.count.len();
+        let high = self.low + bins as f64 * self.width;
+        let (sum, sum_sq) = if at < self.low || at > high {
+            let end = at.clamp(self.low, high);
+            (count * end, count * end * end)
+        } else {
+            (sum, sum_sq)
+        };
         let b = (((at - self.low) / self.width).floor().max(0.0) as usize).min(bins - 1);
         self.count[b] += count;
         self.sum[b] += sum;

@@ -82,6 +82,25 @@ fn two_phase_phantom_defaults() {
     assert_energy_decreases(&r.report);
 }
 
+/// A 16-bit image that uses a small part of its range (the two-phase
+/// phantom's levels mapped to 1225 and 1525 of 65535) with one saturated
+/// pixel: the start's thresholds come from the histogram's robust range, so
+/// the pixel does not take a phase to itself and the phantom is found as
+/// without it.
+#[test]
+fn one_saturated_pixel_does_not_take_a_phase() {
+    let ph = Phantom2Kind::TwoPhase.generate(128, 0.1, 3);
+    let mut img = ph.clone();
+    for v in &mut img.image {
+        *v = (1000.0 + 750.0 * *v) / 65535.0;
+    }
+    let at = img.index(40, 90);
+    img.image[at] = 1.0;
+    let r = run(&img, SegmentParams::new(2));
+    assert!(r.dice > 0.97, "dice {}", r.dice);
+    assert!(r.report.warnings.is_empty(), "{:?}", r.report.warnings);
+}
+
 /// A four-phase run that converged, lowered its energy, kept the benchmark
 /// phantom's triple junctions (Y disk: 4, square+disk: 2, stripes: 4; at
 /// least 6 must survive as eq. (7) junctions) and reached `min_dice`.
