@@ -578,11 +578,12 @@ fn yes() -> bool {
 /// than one sample (1 for unit samples). Lengths given in samples (the
 /// default edge lengths, the smallest adaptive cell) are this many units.
 pub fn sample_step(dims: [usize; 3], spacing: [f64; 3]) -> f64 {
-    let axes: Vec<usize> = (0..3).filter(|&a| dims[a] > 1).collect();
-    axes.iter()
-        .map(|&a| spacing[a])
-        .product::<f64>()
-        .powf(1.0 / axes.len().max(1) as f64)
+    // Called by the region force for every pair of phases each iteration:
+    // no allocation.
+    let (product, axes) = (0..3)
+        .filter(|&a| dims[a] > 1)
+        .fold((1.0f64, 0usize), |(p, n), a| (p * spacing[a], n + 1));
+    product.powf(1.0 / axes.max(1) as f64)
 }
 
 /// The smallest extent (`dims · spacing`) over the axes with more than one
