@@ -108,7 +108,7 @@ pub enum JunctionArg {
 }
 
 /// `--init` values of `segment`.
-#[derive(Clone, Copy, Debug, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, ValueEnum)]
 pub enum InitKind {
     /// Cells labelled by mean against the least-variance (multi-Otsu) thresholds of the histogram of the cell means.
     Histogram,
@@ -121,7 +121,7 @@ pub enum InitKind {
 }
 
 /// `--init` values of `segment3d`.
-#[derive(Clone, Copy, Debug, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, ValueEnum)]
 pub enum Init3Kind {
     /// Cells labelled by mean against the least-variance (multi-Otsu) thresholds of the histogram of the cell means.
     Histogram,
@@ -149,7 +149,8 @@ pub struct SegmentOptions {
     /// shortened down to 4 on an image whose noise is below a fifth of the gap between its phase means].
     #[arg(long, allow_hyphen_values = true)]
     pub edge_length: Option<f64>,
-    /// Initialisation [default: disks when --disk is given, else histogram].
+    /// Initialisation [default: disks when --disk is given, labels with
+    /// --init-labels, else histogram].
     #[arg(long, value_enum)]
     pub init: Option<InitKind>,
     /// A disk for --init disks: X,Y,R in pixels, optionally ,PHASE (default 1). Repeatable.
@@ -159,7 +160,8 @@ pub struct SegmentOptions {
         allow_hyphen_values = true
     )]
     pub disks: Vec<String>,
-    /// Label PNG for --init labels (same size as the image, values 0..N-1).
+    /// Label PNG for --init labels (same size as the image, values 0..N-1);
+    /// implies --init labels.
     #[arg(long)]
     pub init_labels: Option<PathBuf>,
     /// Segment channel K of a colour image (0 = red, 1 = green, 2 = blue,
@@ -195,15 +197,14 @@ impl SegmentOptions {
         params.auto_phases = auto;
         params.edge_length = self.edge_length;
         self.evolution.apply(&mut params);
-        let init = match (self.init, self.disks.is_empty()) {
-            (None, false) => InitKind::Disks,
-            (None, true) => InitKind::Histogram,
-            (Some(k), true) | (Some(k @ InitKind::Disks), false) => k,
-            (Some(_), false) => {
-                return Err(Error::Usage(
-                    "--disk is only used by --init disks (or without --init)".into(),
-                ))
-            }
+        let init = match implied_start(
+            self.init,
+            (!self.disks.is_empty()).then_some((InitKind::Disks, "--disk", "disks")),
+            self.init_labels.is_some(),
+            InitKind::Labels,
+        )? {
+            Some(k) => k,
+            None => InitKind::Histogram,
         };
         params.init = match init {
             InitKind::Histogram => Init::Histogram,
@@ -230,7 +231,8 @@ pub struct Segment3dOptions {
     /// size) [default: smallest side/64·sqrt(N-1) clamped to 3..10 voxel-sized steps].
     #[arg(long, allow_hyphen_values = true)]
     pub edge_length: Option<f64>,
-    /// Initialisation [default: balls when --ball is given, else histogram].
+    /// Initialisation [default: balls when --ball is given, labels with
+    /// --init-labels, else histogram].
     #[arg(long, value_enum)]
     pub init: Option<Init3Kind>,
     /// A ball for --init balls: X,Y,Z,R in the volume's length unit from the corner of voxel 0
@@ -241,7 +243,8 @@ pub struct Segment3dOptions {
         allow_hyphen_values = true
     )]
     pub balls: Vec<String>,
-    /// Label volume for --init labels (same size as the volume, 8-bit values 0..N-1).
+    /// Label volume for --init labels (same size as the volume, 8-bit values
+    /// 0..N-1); implies --init labels.
     #[arg(long)]
     pub init_labels: Option<PathBuf>,
     /// Initial surface (closed triangle mesh: OFF, OBJ or STL, in voxel
@@ -292,15 +295,14 @@ impl Segment3dOptions {
             params.sizing.start_refinements = n;
         }
         self.evolution.apply(&mut params);
-        let init = match (self.init, self.balls.is_empty()) {
-            (None, false) => Init3Kind::Balls,
-            (None, true) => Init3Kind::Histogram,
-            (Some(k), true) | (Some(k @ Init3Kind::Balls), false) => k,
-            (Some(_), false) => {
-                return Err(Error::Usage(
-                    "--ball is only used by --init balls (or without --init)".into(),
-                ))
-            }
+        let init = match implied_start(
+            self.init,
+            (!self.balls.is_empty()).then_some((Init3Kind::Balls, "--ball", "balls")),
+            self.init_labels.is_some(),
+            Init3Kind::Labels,
+        )? {
+            Some(k) => k,
+            None => Init3Kind::Histogram,
         };
         params.init = match init {
             Init3Kind::Histogram => Init::Histogram,
@@ -401,6 +403,41 @@ fn parse_all<T>(
 }
 
 /// `--init labels`: the labels are loaded by the pipeline from `--init-labels`.
+/// The start `--init` and the start's own options ask for (`None`: the
+/// default). A shape option (`shapes`: its start, flag and `--init` name)
+/// or `--init-labels` (`labels`, whose start is `labels_kind`) implies its
+/// start; one given with another start is an error rather than ignored.
+fn implied_start<T: Copy + PartialEq>(
+    init: Option<T>,
+    shapes: Option<(T, &str, &str)>,
+    labels: bool,
+    labels_kind: T,
+) -> Result<Option<T>> {
+    let usage = |flag: &str, name: &str| {
+        Error::Usage(format!(
+            "{flag} is only used by --init {name} (or without --init)"
+        ))
+    };
+    if let Some((kind, flag, name)) = shapes {
+        if labels {
+            return Err(Error::Usage(format!(
+                "{flag} and --init-labels are two different starts: give one"
+            )));
+        }
+        return match init {
+            Some(k) if k != kind => Err(usage(flag, name)),
+            _ => Ok(Some(kind)),
+        };
+    }
+    if labels {
+        return match init {
+            Some(k) if k != labels_kind => Err(usage("--init-labels", "labels")),
+            _ => Ok(Some(labels_kind)),
+        };
+    }
+    Ok(init)
+}
+
 fn labels_init(given: bool, what: &str) -> Result<Init> {
     if !given {
         return Err(Error::Usage(format!(

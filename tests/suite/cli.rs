@@ -490,24 +490,40 @@ fn bad_init_labels() {
         &out,
         "X,Y,R",
     );
-    // a good label image works
+    // a good label image works, and --init-labels alone implies --init labels
     let ok = write_labels(d.path(), 32, 32, 1);
-    let o = bin()
-        .args([
-            "segment",
-            p,
-            "--init",
-            "labels",
-            "--no-label-flips",
-            "--quiet",
-            "--init-labels",
-        ])
-        .arg(&ok)
-        .arg("--out")
-        .arg(d.path().join("good"))
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ok = ok.to_str().unwrap();
+    let given = ["--init-labels", ok];
+    fails(
+        &SEGMENT,
+        &[p, "--init", "histogram", given[0], ok],
+        &out,
+        "--init labels",
+    );
+    fails(
+        &SEGMENT,
+        &[p, "--disk", "8,8,4", given[0], ok],
+        &out,
+        "two different starts",
+    );
+    for args in [&["--init", "labels"][..], &[]] {
+        let o = bin()
+            .args(["segment", p, "--no-label-flips", "--quiet"])
+            .args(args)
+            .args(given)
+            .arg("--out")
+            .arg(d.path().join("good"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let report = std::fs::read(d.path().join("good/report.json")).unwrap();
+        let report: serde_json::Value = serde_json::from_slice(&report).unwrap();
+        let init = &report["params"]["init"];
+        assert!(
+            init.get("labels").is_some(),
+            "{args:?}: started from {init}"
+        );
+    }
 }
 
 #[test]
