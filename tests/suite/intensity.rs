@@ -119,6 +119,15 @@ fn torus_as_8_bit(n: usize) -> (dsc_seg::phantom::Phantom3, Vec<u8>, Vec<f32>) {
     (ph, bytes, eight)
 }
 
+/// The 8-bit samples `bytes` as a 16-bit volume using 64 levels, loaded
+/// (value / 65535).
+fn as_64_levels(bytes: &[u8]) -> Vec<f32> {
+    bytes
+        .iter()
+        .map(|&b| (b as f32 * 63.0 / 255.0).round() / 65535.0)
+        .collect()
+}
+
 /// The 3D parameters on the uniform mesh (`segment3d --uniform`).
 fn uniform_3d() -> SegmentParams {
     let mut params = SegmentParams::new_3d(2);
@@ -134,14 +143,7 @@ fn encodings_of_a_3d_phantom_give_the_same_labels() {
     let base = labels_3d(&eight, n);
     assert!(mean_dice(&base, &ph.truth, 2) > 0.97);
     let encodings: [(&str, Vec<f32>, bool); 4] = [
-        (
-            "16-bit, 64 levels",
-            bytes
-                .iter()
-                .map(|&b| (b as f32 * 63.0 / 255.0).round() / 65535.0)
-                .collect(),
-            false,
-        ),
+        ("16-bit, 64 levels", as_64_levels(&bytes), false),
         (
             "16-bit + 20000",
             bytes
@@ -199,10 +201,7 @@ fn encodings_of_a_3d_phantom_give_the_same_labels() {
 fn a_3d_phantom_with_64_levels_gives_the_same_labels_on_the_uniform_mesh() {
     let n = 48;
     let (ph, bytes, eight) = torus_as_8_bit(n);
-    let levels64: Vec<f32> = bytes
-        .iter()
-        .map(|&b| (b as f32 * 63.0 / 255.0).round() / 65535.0)
-        .collect();
+    let levels64 = as_64_levels(&bytes);
     let base = labels_3d_with(&eight, n, uniform_3d());
     let labels = labels_3d_with(&levels64, n, uniform_3d());
     assert!(mean_dice(&base, &ph.truth, 2) > 0.97);
@@ -221,10 +220,7 @@ fn a_3d_phantom_with_64_levels_gives_the_same_labels_on_the_uniform_mesh() {
 fn a_3d_phantom_with_64_levels_gives_the_same_labels_with_fine_interfaces() {
     let n = 48;
     let (ph, bytes, eight) = torus_as_8_bit(n);
-    let levels64: Vec<f32> = bytes
-        .iter()
-        .map(|&b| (b as f32 * 63.0 / 255.0).round() / 65535.0)
-        .collect();
+    let levels64 = as_64_levels(&bytes);
     let mut fine = SegmentParams::new_3d(2);
     fine.edge_length = Some(1.5);
     let base = labels_3d_with(&eight, n, fine.clone());
