@@ -307,7 +307,6 @@ fn task_is_3d(task: &Task) -> bool {
     matches!(task, Task::Volume { .. })
 }
 
-/// One line on stderr: how the run ended and where the outputs are.
 /// Every warning of the run on stderr, quiet or not: a result with a lost
 /// phase must not pass for a good one.
 fn print_warnings(report: &dsc_seg::segment::SegmentReport) {
@@ -316,9 +315,10 @@ fn print_warnings(report: &dsc_seg::segment::SegmentReport) {
     }
 }
 
+/// One line on stderr: how the run ended and where the outputs are.
 fn print_summary(report: &dsc_seg::segment::SegmentReport, cells: &str, out: &std::path::Path) {
     let ending = if report.converged && !report.warnings.is_empty() {
-        "converged with lost phases (see the warnings)"
+        "converged with warnings (above)"
     } else if report.converged {
         "converged"
     } else {

@@ -327,7 +327,10 @@ pub(crate) fn segment_image_then<T>(
     let mut seg = Segmentation::<D2>::new(view, params.clone())?;
     let ready = ready()?;
 
-    let report = run_with_progress(&mut seg, params.max_iterations, quiet);
+    let mut report = run_with_progress(&mut seg, params.max_iterations, quiet);
+    report
+        .warnings
+        .extend(phase_choice.as_ref().and_then(PhaseChoice::cap_warning));
     let segment = t_seg.elapsed().as_secs_f64();
 
     let labels = seg.label_image();

@@ -70,6 +70,23 @@ pub struct PhaseChoice {
     pub trials: Vec<PhaseTrial>,
 }
 
+impl PhaseChoice {
+    /// A warning when the choice is the largest count tried and that count
+    /// was accepted: the search stopped at the cap, not at the data, so the
+    /// image may hold more phases, or be no piecewise-constant image at all
+    /// (a ramp or shading passes every test of a region at every count).
+    pub fn cap_warning(&self) -> Option<String> {
+        let last = self.trials.last()?;
+        (last.accepted && last.phases == self.max_phases && self.max_phases > 2).then(|| {
+            format!(
+                "--phases auto took the largest count tried ({}): the image may hold more \
+                 phases, or vary smoothly rather than in regions; give --max-phases or --phases",
+                self.max_phases
+            )
+        })
+    }
+}
+
 /// Runs the segmentation of `image` with `params(n)` for n = 2, 3, … up to
 /// `max_phases` and returns the largest n whose phases are all real (see the
 /// module documentation), with every trial. Counts above the image's distinct

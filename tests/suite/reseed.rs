@@ -83,5 +83,21 @@ fn the_number_of_phases_is_chosen_from_the_data() {
         assert_eq!(choice.phases, kind.phases(), "{kind}: {choice:?}");
         let last = choice.trials.last().unwrap();
         assert!(!last.accepted && last.reason.is_some(), "{choice:?}");
+        assert_eq!(choice.cap_warning(), None);
     }
+}
+
+/// On a ramp every count passes as regions: the choice is the cap, and
+/// says so rather than passing for what the data holds.
+#[test]
+fn a_choice_at_the_cap_says_so() {
+    use dsc_seg::dim::D2;
+    use dsc_seg::segment::auto::choose_phases;
+    let n = 96;
+    let ramp: Vec<f32> = (0..n * n).map(|i| (i % n) as f32 / n as f32).collect();
+    let view = ImageView::new_2d(n, n, &ramp).unwrap();
+    let choice = choose_phases::<D2>(view, 3, SegmentParams::new).unwrap();
+    assert_eq!(choice.phases, 3, "{choice:?}");
+    let warning = choice.cap_warning().expect("a warning at the cap");
+    assert!(warning.contains("largest count tried (3)"), "{warning}");
 }
