@@ -195,15 +195,14 @@ fn encodings_of_a_3d_phantom_give_the_same_labels() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
-/// On the uniform mesh (data-independent until labels flip) the 64-level
-/// re-encoding of the 3D phantom gives the 8-bit run's labels.
-#[test]
-fn a_3d_phantom_with_64_levels_gives_the_same_labels_on_the_uniform_mesh() {
+/// The 48³ torus segmented with `params` from its 8-bit samples and from
+/// their 64-level 16-bit re-encoding: the 8-bit run is accurate and the two
+/// runs' labels agree at Dice ≥ 0.99.
+fn assert_64_levels_agree_with_8_bit(params: SegmentParams) {
     let n = 48;
     let (ph, bytes, eight) = torus_as_8_bit(n);
-    let levels64 = as_64_levels(&bytes);
-    let base = labels_3d_with(&eight, n, uniform_3d());
-    let labels = labels_3d_with(&levels64, n, uniform_3d());
+    let base = labels_3d_with(&eight, n, params.clone());
+    let labels = labels_3d_with(&as_64_levels(&bytes), n, params);
     assert!(mean_dice(&base, &ph.truth, 2) > 0.97);
     let dice = mean_dice(&labels, &base, 2);
     assert!(
@@ -212,25 +211,22 @@ fn a_3d_phantom_with_64_levels_gives_the_same_labels_on_the_uniform_mesh() {
     );
 }
 
+/// On the uniform mesh (data-independent until labels flip) the 64-level
+/// re-encoding of the 3D phantom gives the 8-bit run's labels.
+#[test]
+fn a_3d_phantom_with_64_levels_gives_the_same_labels_on_the_uniform_mesh() {
+    assert_64_levels_agree_with_8_bit(uniform_3d());
+}
+
 /// With the 3D default at interfaces 1.5 voxels fine (`--edge-length 1.5`)
 /// the 64-level re-encoding gives the 8-bit run's labels too: two runs that
 /// part converge to optima closer together the finer the interface cells
 /// (Dice 0.996 here, 0.988 at the default 3).
 #[test]
 fn a_3d_phantom_with_64_levels_gives_the_same_labels_with_fine_interfaces() {
-    let n = 48;
-    let (ph, bytes, eight) = torus_as_8_bit(n);
-    let levels64 = as_64_levels(&bytes);
     let mut fine = SegmentParams::new_3d(2);
     fine.edge_length = Some(1.5);
-    let base = labels_3d_with(&eight, n, fine.clone());
-    let labels = labels_3d_with(&levels64, n, fine);
-    assert!(mean_dice(&base, &ph.truth, 2) > 0.97);
-    let dice = mean_dice(&labels, &base, 2);
-    assert!(
-        dice >= 0.99,
-        "Dice {dice} between the 64-level and the 8-bit run"
-    );
+    assert_64_levels_agree_with_8_bit(fine);
 }
 
 /// A 16-bit volume's report gives its range and phase means in the file's
