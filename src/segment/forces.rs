@@ -301,10 +301,12 @@ impl<K: Raster> ForceField<K> {
     ) {
         self.facets.clear();
         self.interface_measure = 0.0;
+        // The sample spacing in the image's unit, once for every facet.
+        let spacing = s.spacing * image.sample_step();
         for facet in complex.interface_facets() {
             self.interface_measure += facet.measure;
             self.add_facet_topology(&facet);
-            self.add_region_force(&facet, image, phases, s);
+            self.add_region_force(&facet, image, phases, s, spacing);
         }
     }
 
@@ -356,7 +358,8 @@ impl<K: Raster> ForceField<K> {
         }
     }
 
-    /// The region force of eqs. (5)–(7) sampled along `facet` and spread
+    /// The region force of eqs. (5)–(7) sampled every `spacing` (in the
+    /// image's unit) along `facet` and spread
     /// over its corners with the hat weights: along the normal at two-phase
     /// vertices, as eq. (7) weights (or along the normal, per
     /// [`JunctionForce`]) at triple junctions. Nothing where the two phases'
@@ -368,6 +371,7 @@ impl<K: Raster> ForceField<K> {
         image: &ImageView<'_>,
         phases: &PhaseStats,
         s: &ForceSettings,
+        spacing: f64,
     ) {
         let nf = K::N; // corners per facet
         let InterfaceFacet {
@@ -386,7 +390,6 @@ impl<K: Raster> ForceField<K> {
             return; // equal means: eq. (6) undefined, no region force
         }
         let (acc, kinds) = (&mut self.acc, &self.kinds);
-        let spacing = s.spacing * image.sample_step();
         K::facet_samples(&cpts[..nf], spacing, &mut |p, w, ds| {
             let intensity = K::sample(image, p);
             let f = match s.model {
