@@ -11,6 +11,13 @@ usage (from the repository root, after `cargo build --release` and
 `pip install -r benches/compare/requirements.txt`):
 
   python3 benches/phase_measures.py --out OUT [--sizes 256 512] [--sizes3d 64 128] [--seeds 1 2 ... 8]
+  python3 benches/phase_measures.py --out OUT --images DIR
+
+--images measures 2D images made by another generator instead of the built-in
+phantoms: every NAME.png in DIR with its ground-truth label image NAME_gt.png
+beside it (any label values; the number of distinct values is the number of
+phases). Each phase found is compared with the ground-truth label it overlaps
+most.
 """
 from __future__ import annotations
 
@@ -99,6 +106,27 @@ def collect_2d(out, sizes, sigmas, seeds):
     return found
 
 
+def collect_images(out, folder):
+    """{(image, phase): [(truth, pv, se, count, mesh)]} for the NAME.png /
+    NAME_gt.png pairs of `folder`."""
+    found = {}
+    for name in sorted(f[:-len("_gt.png")] for f in os.listdir(folder) if f.endswith("_gt.png")):
+        image = os.path.join(folder, name + ".png")
+        if not os.path.exists(image):
+            continue
+        truth = np.array(Image.open(os.path.join(folder, name + "_gt.png")))
+        res = os.path.join(out, name + "_out")
+        run("segment", image, "--phases", len(np.unique(truth)),
+            "--quiet", "--outputs", "labels,phases", "--out", res)
+        labels = np.array(Image.open(os.path.join(res, "labels.png")))
+        measured = phases_csv(os.path.join(res, "phases.csv"))
+        for p, (pv, se, area, mesh) in enumerate(measured):
+            values, overlap = np.unique(truth[labels == p], return_counts=True)
+            count = int((truth == values[np.argmax(overlap)]).sum())
+            found.setdefault((name, p), []).append((count, pv, se, area, mesh))
+    return found
+
+
 def collect_3d(out, sizes, sigmas, seeds):
     """{(volume, 1): [(truth, pv, se, count, mesh) per seed]} and the
     analytic and noise-free model volumes per volume."""
@@ -174,8 +202,13 @@ def main():
     ap.add_argument("--seeds", type=int, nargs="+", default=[1],
                     help="noise seeds of the phantoms: the first one's table, then the "
                          "errors' statistics over all")
+    ap.add_argument("--images", metavar="DIR",
+                    help="measure the NAME.png / NAME_gt.png pairs of DIR instead of the phantoms")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
+    if a.images:
+        first_seed_2d(collect_images(a.out, a.images))
+        return
     if a.sizes:
         found = collect_2d(a.out, a.sizes, a.sigmas, a.seeds)
         first_seed_2d(found)
