@@ -124,7 +124,7 @@ pub enum Status {
 }
 
 /// The summary table's columns, the fields of [`Row`].
-pub const COLUMNS: [&str; 8] = [
+pub const COLUMNS: [&str; 9] = [
     "name",
     "input",
     "phases",
@@ -133,6 +133,7 @@ pub const COLUMNS: [&str; 8] = [
     "seconds",
     "status",
     "error",
+    "warnings",
 ];
 
 /// One row of the summary table.
@@ -154,6 +155,11 @@ pub struct Row {
     pub status: Status,
     /// The error, for a failed input.
     pub error: String,
+    /// What the run warned about (a lost phase, a count at the cap), `; `
+    /// between warnings; empty when all is well. A batch must not hide what
+    /// a single run would print.
+    #[serde(default)]
+    pub warnings: String,
 }
 
 /// The rows of a finished batch, in input order, and where the summary is.
@@ -190,11 +196,19 @@ pub fn expand_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
         } else if three_d {
             inputs.extend(volume_folder_entries(p));
         } else {
-            inputs.extend(
-                sorted_entries(p)?
-                    .into_iter()
-                    .filter(|e| e.is_file() && has_extension(e, IMAGE_EXTENSIONS)),
-            );
+            let images: Vec<PathBuf> = sorted_entries(p)?
+                .into_iter()
+                .filter(|e| e.is_file() && has_extension(e, IMAGE_EXTENSIONS))
+                .collect();
+            // An empty batch would "succeed" with an empty summary.
+            if images.is_empty() {
+                return Err(Error::Usage(format!(
+                    "folder {} holds no image ({})",
+                    p.display(),
+                    IMAGE_EXTENSIONS.join(", ")
+                )));
+            }
+            inputs.extend(images);
         }
     }
     Ok(inputs)
@@ -434,6 +448,7 @@ impl Batch {
             seconds: Some(start.elapsed().as_secs_f64()),
             status: Status::Done,
             error: String::new(),
+            warnings: summary.warnings.join("; "),
         };
         let marker = Marker {
             fingerprint,
@@ -535,6 +550,7 @@ fn error_row(input: &Path, error: String) -> Row {
         seconds: None,
         status: Status::Error,
         error,
+        warnings: String::new(),
     }
 }
 
@@ -543,17 +559,24 @@ fn describe(row: &Row) -> String {
     match row.status {
         Status::Error => format!("{}: error: {}", row.name, row.error),
         Status::Skipped => format!("{}: complete, skipped", row.name),
-        Status::Done => format!(
-            "{}: {} after {} iterations ({:.2} s)",
-            row.name,
-            if row.converged == Some(true) {
-                "converged"
+        Status::Done => {
+            let line = format!(
+                "{}: {} after {} iterations ({:.2} s)",
+                row.name,
+                if row.converged == Some(true) {
+                    "converged"
+                } else {
+                    "stopped at the iteration cap"
+                },
+                row.iterations.unwrap_or(0),
+                row.seconds.unwrap_or(0.0)
+            );
+            if row.warnings.is_empty() {
+                line
             } else {
-                "stopped at the iteration cap"
-            },
-            row.iterations.unwrap_or(0),
-            row.seconds.unwrap_or(0.0)
-        ),
+                format!("{line}; warning: {}", row.warnings)
+            }
+        }
     }
 }
 

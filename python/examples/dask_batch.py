@@ -28,7 +28,9 @@ import numpy as np
 import dsc_seg
 
 EXTENSIONS = {".tif", ".tiff", ".png", ".npy"}
-COLUMNS = ["name", "input", "phases", "iterations", "converged", "seconds", "status", "error"]
+COLUMNS = [
+    "name", "input", "phases", "iterations", "converged", "seconds", "status", "error", "warnings"
+]
 
 
 def read_array(path: Path) -> np.ndarray:
@@ -61,6 +63,7 @@ def segment_file(
             iterations=report["iterations"],
             converged=report["converged"],
             status="done",
+            warnings="; ".join(report["warnings"]),
         )
     except Exception as e:  # a bad input fails its own row
         row.update(status="error", error=f"{type(e).__name__}: {e}")

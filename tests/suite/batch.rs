@@ -112,7 +112,8 @@ fn folder_with_a_corrupt_file_runs_the_others_and_skips_them_next_time() {
             "converged",
             "seconds",
             "status",
-            "error"
+            "error",
+            "warnings"
         ]
     );
     assert_eq!(rows.len(), 6);
@@ -401,4 +402,38 @@ fn rows_give_the_phase_count_auto_chose() {
         assert_eq!(row(&rows, stem)[2], chosen, "{stem}");
     }
     assert_ne!(row(&rows, "four_phase")[2], "2", "not the default count");
+}
+
+#[test]
+fn rows_carry_the_warnings_of_their_runs() {
+    let d = tmp();
+    let images = d.path().join("images");
+    std::fs::create_dir_all(&images).unwrap();
+    write_disk(&images, "disk.png", 64, 1);
+    let out = d.path().join("out");
+    // A two-phase disk asked for four phases: the run warns that phases are empty.
+    let o = run(&["--phases", "4", "--outputs", "report"], &[&images], &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = summary(&out.join("summary.csv"));
+    let warnings = &row(&rows, "disk")[8];
+    assert!(warnings.contains("covers no pixel"), "{warnings:?}");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("disk: converged") && stderr.contains("warning:"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_folder_without_images_is_an_error() {
+    let d = tmp();
+    let empty = d.path().join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    std::fs::write(empty.join("notes.txt"), "not an image").unwrap();
+    let out = d.path().join("out");
+    let o = run(&[], &[&empty], &out);
+    assert_eq!(o.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("holds no image"), "{stderr}");
+    assert!(!out.exists(), "nothing written");
 }
