@@ -71,7 +71,7 @@ fn intensities(samples: Samples) -> PyResult<Vec<f32>> {
         Samples::Direct(v) => Ok(v),
         Samples::Raw(v) => min_max_normalise(&v)
             .map(|(samples, _)| samples)
-            .ok_or_else(|| PyValueError::new_err("image holds no finite value")),
+            .map_err(|e| PyValueError::new_err(e.to_string())),
     }
 }
 

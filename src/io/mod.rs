@@ -21,6 +21,8 @@ pub use error::IoError;
 pub use frame::{Frame, FrameSource};
 pub use image2::{save_gray8_png, save_image_png, Colour, Image2, SampleType};
 pub use render::{phase_color, save_gif, Overlay};
-pub use volume::{min_max_normalise, save_labels_nifti, save_labels_tiff, save_nifti, Volume};
+pub use volume::{
+    min_max_normalise, save_labels_nifti, save_labels_tiff, save_nifti, NonFiniteSamples, Volume,
+};
 pub use vti::{write_pvd, write_vti, write_vtm};
 pub use vtk::{write_vtp, write_vtp_lines, write_vtu, CellArray, Cells};

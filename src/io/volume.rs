@@ -276,9 +276,9 @@ impl Volume {
             }
             dec.next_image().map_err(bad)?;
         }
-        let (data, intensity) = raw.normalise().ok_or_else(|| IoError::MalformedTiff {
+        let (data, intensity) = raw.normalise().map_err(|e| IoError::MalformedTiff {
             path: path.to_path_buf(),
-            reason: NO_FINITE.into(),
+            reason: e.to_string(),
         })?;
         Ok(Volume {
             nx,
@@ -454,14 +454,14 @@ impl Samples {
         }
     }
 
-    /// `None` when no sample is finite (see [`min_max_normalise`]).
-    fn normalise(self) -> Option<(Vec<f32>, IntensityMap)> {
+    /// Refused when a sample is not finite (see [`min_max_normalise`]).
+    fn normalise(self) -> std::result::Result<(Vec<f32>, IntensityMap), NonFiniteSamples> {
         match self {
-            Samples::U8(v) => Some((
+            Samples::U8(v) => Ok((
                 v.into_iter().map(|s| s as f32 / 255.0).collect(),
                 IntensityMap::unsigned(8),
             )),
-            Samples::U16(v) => Some((
+            Samples::U16(v) => Ok((
                 v.into_iter().map(|s| s as f32 / 65535.0).collect(),
                 IntensityMap::unsigned(16),
             )),
@@ -492,31 +492,61 @@ fn append_f64(v: &mut Vec<f64>, page: tiff::decoder::DecodingResult) -> bool {
     true
 }
 
-/// Maps values linearly so that the finite minimum becomes 0 and the maximum
-/// 1; constant data becomes 0, NaN becomes 0. `None` when no value is finite:
-/// such data holds no image, and all zeros would pass it off as a constant one.
-pub fn min_max_normalise(v: &[f64]) -> Option<(Vec<f32>, IntensityMap)> {
+/// Maps values linearly so that the minimum becomes 0 and the maximum 1;
+/// constant data becomes 0. Refuses data with a NaN or infinite sample: no
+/// intensity is known there, and mapping it to any value (the lowest, say)
+/// would pass a guess off as data. 2D images are refused alike.
+pub fn min_max_normalise(
+    v: &[f64],
+) -> std::result::Result<(Vec<f32>, IntensityMap), NonFiniteSamples> {
+    let non_finite = v.iter().filter(|s| !s.is_finite()).count();
+    if non_finite > 0 || v.is_empty() {
+        return Err(NonFiniteSamples {
+            count: non_finite,
+            total: v.len(),
+        });
+    }
     let (lo, hi) = v
         .iter()
-        .filter(|s| s.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &s| {
             (lo.min(s), hi.max(s))
         });
-    if lo > hi {
-        return None;
-    }
     let range = hi - lo;
     let data = v
         .iter()
         .map(|&s| {
-            if range.is_nan() || range <= 0.0 || s.is_nan() {
+            if range <= 0.0 {
                 0.0
             } else {
                 ((s - lo) / range).clamp(0.0, 1.0) as f32
             }
         })
         .collect();
-    Some((data, IntensityMap::stretched(lo, hi)))
+    Ok((data, IntensityMap::stretched(lo, hi)))
+}
+
+/// Why [`min_max_normalise`] refused its data: how many of the samples are
+/// NaN or infinite.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NonFiniteSamples {
+    /// Samples that are NaN or infinite.
+    pub count: usize,
+    /// All samples.
+    pub total: usize,
+}
+
+impl std::fmt::Display for NonFiniteSamples {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.total == 0 {
+            return write!(f, "no samples");
+        }
+        write!(
+            f,
+            "{} of {} samples are not finite numbers (NaN or infinite); replace them \
+             (for example with the background's value) before segmenting",
+            self.count, self.total
+        )
+    }
 }
 
 /// Compares strings in natural order: runs of ASCII digits compare by
@@ -560,9 +590,6 @@ pub(crate) fn natural_cmp(a: &str, b: &str) -> Ordering {
         }
     }
 }
-
-/// Why data without one finite sample is refused.
-const NO_FINITE: &str = "no sample is a finite number (all NaN or infinite)";
 
 /// Size of a NIfTI-1 header.
 const NIFTI_HDR: usize = 348;
@@ -709,7 +736,7 @@ fn parse_nifti(path: &Path, b: &[u8]) -> Result<Volume> {
                     }
                 })
                 .collect();
-            min_max_normalise(&values).ok_or_else(|| bad(NO_FINITE.into()))?
+            min_max_normalise(&values).map_err(|e| bad(e.to_string()))?
         }
     };
     // Axes beyond `dim[0]` do not exist in the file: unit spacing.

@@ -222,9 +222,21 @@ fn constant_volumes() {
             &SEGMENT3D,
             &[p.to_str().unwrap()],
             &out,
-            "no sample is a finite number",
+            "216 of 216 samples are not finite",
         );
     }
+    // One NaN voxel in a valid volume (a masked scan): refused, as in 2D,
+    // rather than read as the darkest value.
+    let mut data: Vec<f32> = values(12).iter().map(|&v| v as f32).collect();
+    data[700] = f32::NAN;
+    let p = d.path().join("one_nan.nii");
+    save_nifti(&p, &Volume::from_raw(12, 12, 12, data)).unwrap();
+    fails(
+        &SEGMENT3D,
+        &[p.to_str().unwrap()],
+        &out,
+        "1 of 1728 samples are not finite",
+    );
     // Two values and three phases.
     let two: Vec<u8> = (0..1000)
         .map(|i| if i % 2 == 0 { 10 } else { 200 })
