@@ -128,12 +128,16 @@ impl Volume {
     /// Returns the volume with voxels of size `spacing` instead of the
     /// file's: the axes keep their world directions and voxel 0 its place.
     pub fn respaced(mut self, spacing: [f64; 3]) -> Self {
+        let ratio: [f64; 3] = std::array::from_fn(|c| spacing[c] / self.spacing[c]);
         if let Some(a) = &mut self.affine {
             for row in a.iter_mut() {
                 for (c, v) in row.iter_mut().take(3).enumerate() {
-                    *v *= spacing[c] / self.spacing[c];
+                    *v *= ratio[c];
                 }
             }
+        }
+        if let Some(h) = &mut self.nifti_header {
+            rescale_nifti_axes(h, ratio);
         }
         self.spacing = spacing;
         self.source = FrameSource::Given;
@@ -822,6 +826,30 @@ fn nifti_affine(
     (diag, FrameSource::NiftiPixdim)
 }
 
+/// Scales the voxel axes of a NIfTI-1 header by `ratio`, as
+/// [`Volume::respaced`] does to the affine: `pixdim[1..=3]` (the qform's
+/// scale) and the sform's first three columns, so that a label map written
+/// from this header lines up with the respaced volume, not the file's grid.
+fn rescale_nifti_axes(header: &mut [u8], ratio: [f64; 3]) {
+    let le = i32::from_le_bytes(header[0..4].try_into().expect("4 bytes")) == NIFTI_HDR as i32;
+    let mut scale = |o: usize, r: f64| {
+        let bytes: [u8; 4] = header[o..o + 4].try_into().expect("4 bytes");
+        let v = if le {
+            f32::from_le_bytes(bytes)
+        } else {
+            f32::from_be_bytes(bytes)
+        };
+        let v = (f64::from(v) * r) as f32;
+        header[o..o + 4].copy_from_slice(&if le { v.to_le_bytes() } else { v.to_be_bytes() });
+    };
+    for (c, &r) in ratio.iter().enumerate() {
+        scale(80 + 4 * c, r);
+        for row in 0..3 {
+            scale(280 + 16 * row + 4 * c, r);
+        }
+    }
+}
+
 /// The spatial unit of `xyzt_units` (unknown is read as mm, as most tools do).
 fn nifti_unit(xyzt_units: u8) -> &'static str {
     match xyzt_units & 0x07 {
@@ -1168,6 +1196,58 @@ mod tests {
             Volume::load(&t),
             Err(IoError::MalformedNifti { .. })
         ));
+    }
+
+    /// `--spacing` on a NIfTI input: the label map written from the
+    /// respaced volume's header has the new voxel size, whether the file
+    /// places its voxels by sform or by qform.
+    #[test]
+    fn a_respaced_nifti_writes_labels_on_the_new_grid() {
+        let dir = tempfile::tempdir().unwrap();
+        let affine: Affine = [
+            [-0.5, 0.0, 0.0, 30.0],
+            [0.0, 0.5, 0.0, -12.0],
+            [0.0, 0.0, 2.0, 5.0],
+        ];
+        let v = Volume::from_fn(4, 3, 2, |x, _, _| x as f32 / 3.0)
+            .with_spacing([0.5, 0.5, 2.0])
+            .with_affine(affine, FrameSource::NiftiSform);
+        let p = dir.path().join("v.nii");
+        save_nifti(&p, &v).unwrap();
+        let mut qform_only = std::fs::read(&p).unwrap();
+        qform_only[252..254].copy_from_slice(&1i16.to_le_bytes());
+        qform_only[254..256].copy_from_slice(&0i16.to_le_bytes());
+        // A half turn about z (quaternion (0, 0, 1)) with qfac -1 (z flipped),
+        // offsets as the sform's.
+        for (o, q) in [
+            (256, 0.0f32),
+            (260, 0.0),
+            (264, 1.0),
+            (268, 30.0),
+            (272, -12.0),
+            (276, 5.0),
+        ] {
+            qform_only[o..o + 4].copy_from_slice(&q.to_le_bytes());
+        }
+        qform_only[76..80].copy_from_slice(&(-1f32).to_le_bytes());
+        let q = dir.path().join("q.nii");
+        std::fs::write(&q, &qform_only).unwrap();
+        for input in [p, q] {
+            let respaced = Volume::load(&input).unwrap().respaced([1.0, 1.0, 1.0]);
+            let labels = dir.path().join("labels.nii.gz");
+            save_labels_nifti(&labels, respaced.nifti_header().unwrap(), &[1; 24], 2).unwrap();
+            let written = Volume::load(&labels).unwrap();
+            assert_eq!(written.spacing(), [1.0; 3], "{input:?}");
+            let (a, b) = (
+                written.frame().index_to_world,
+                respaced.frame().index_to_world,
+            );
+            for (ra, rb) in a.iter().zip(&b) {
+                for (x, y) in ra.iter().zip(rb) {
+                    assert!((x - y).abs() < 1e-5, "{input:?}: {a:?} against {b:?}");
+                }
+            }
+        }
     }
 
     #[test]
