@@ -108,7 +108,7 @@ pub fn choose_phases<K: Raster>(
         let thinnest = thinnest_phase(seg.complex(), &seg.phases().count);
         let lost = seg.lost_phases();
         let reason = if let Some(l) = lost.first() {
-            Some(l.describe(seg.phases()))
+            Some(l.describe(&seg.phase_order()))
         } else if thinnest < MIN_THICKNESS {
             Some(format!(
                 "a phase is {thinnest:.2} px thick (a band along edges, not a region)"

@@ -935,13 +935,14 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let final_energy = self.data_energy() + self.nu * self.interface_measure();
         self.times.total = self.times.setup + t0.elapsed().as_secs_f64();
         let converged = self.converged();
+        let order = self.phase_order();
         let warnings: Vec<String> = self
             .lost_phases()
             .iter()
             .map(|l| {
                 format!(
                     "{}: the result has fewer than the {} distinct phases asked for (the image may hold fewer)",
-                    l.describe(&self.phases),
+                    l.describe(&order),
                     self.params.phases
                 )
             })

@@ -41,15 +41,25 @@ impl LostPhase {
         }
     }
 
-    /// One line for a user, with the means in the units of the image.
-    pub fn describe(&self, phases: &PhaseStats) -> String {
+    /// One line for a user, naming phases as `labels.png` numbers them:
+    /// `order` maps a mesh label to its output phase (by increasing mean,
+    /// the empty ones last; [`Segmentation::phase_order`](super::Segmentation::phase_order)).
+    /// The mesh's own labels mean nothing to a user, and means on the
+    /// loaded scale are not the file's units (`report.json` has those).
+    pub fn describe(&self, order: &[u8]) -> String {
+        let phase = |l: Label| order.get(l as usize).map_or(l, |&p| Label::from(p));
         match *self {
-            LostPhase::Empty(l) => format!("phase label {l} covers no pixel"),
-            LostPhase::Duplicate { phase, twin } => format!(
-                "phase labels {phase} and {twin} have the same mean ({:.6} and {:.6}) within the noise",
-                phases.mean_of(phase).unwrap_or(f64::NAN),
-                phases.mean_of(twin).unwrap_or(f64::NAN)
+            LostPhase::Empty(l) => format!(
+                "phase {} covers no pixel (labels.png has no value {0})",
+                phase(l)
             ),
+            LostPhase::Duplicate { phase: a, twin: b } => {
+                let (lo, hi) = (phase(a).min(phase(b)), phase(a).max(phase(b)));
+                format!(
+                    "phases {lo} and {hi} have the same mean within the noise \
+                     (report.json phases gives their means)"
+                )
+            }
         }
     }
 }

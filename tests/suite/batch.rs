@@ -412,11 +412,24 @@ fn rows_carry_the_warnings_of_their_runs() {
     write_disk(&images, "disk.png", 64, 1);
     let out = d.path().join("out");
     // A two-phase disk asked for four phases: the run warns that phases are empty.
-    let o = run(&["--phases", "4", "--outputs", "report"], &[&images], &out);
+    let o = run(
+        &["--phases", "4", "--outputs", "labels,report"],
+        &[&images],
+        &out,
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let rows = summary(&out.join("summary.csv"));
     let warnings = &row(&rows, "disk")[8];
     assert!(warnings.contains("covers no pixel"), "{warnings:?}");
+    // The warnings name phases as labels.png numbers them.
+    let labels = image::open(out.join("disk").join("labels.png"))
+        .unwrap()
+        .into_luma8();
+    for phase in 0..4u8 {
+        let named = warnings.contains(&format!("phase {phase} covers no pixel"));
+        let present = labels.pixels().any(|p| p[0] == phase);
+        assert_ne!(named, present, "phase {phase}: {warnings:?}");
+    }
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(
         stderr.contains("disk: converged") && stderr.contains("warning:"),
