@@ -35,6 +35,11 @@ pub struct EvolutionArgs {
     /// Largest displacement per iteration as a fraction of L.
     #[arg(long, allow_hyphen_values = true)]
     pub step_fraction: Option<f64>,
+    /// Vertices asked to move less than this fraction of L in an iteration
+    /// stay where they are (the noise's jitter about a settled interface)
+    /// [default: 0 in 2D, 0.02 in 3D].
+    #[arg(long, allow_hyphen_values = true)]
+    pub min_move: Option<f64>,
     /// Triple-junction force of eq. (7): `edge-local` (the default: each
     /// sample bracketed by its own edge's phases) or `paper` (literal: the
     /// junction's phases bracket every sample; grows wedges on blurred edges).
@@ -81,6 +86,7 @@ impl EvolutionArgs {
         set(&mut p.rigidity, self.rigidity);
         set(&mut p.elasticity, self.elasticity);
         set(&mut p.step_fraction, self.step_fraction);
+        set(&mut p.min_move, self.min_move);
         set(&mut p.length_weight, self.length_weight);
         p.flip_interval = self.flip_interval.unwrap_or(p.flip_interval);
         if self.adaptive || self.min_edge_length.is_some() || self.max_edge_length.is_some() {

@@ -70,7 +70,7 @@ impl<K: Raster> ForceStage<K> {
         let kinds = std::mem::take(&mut self.term_kinds);
         self.add_smoothing(terms, &kinds, scale, l);
         self.term_kinds = kinds;
-        self.set_destinations(complex)
+        self.set_destinations(complex, state.params.min_move * l)
     }
 
     /// Every term adds into its own buffer, and the external ones are summed;
@@ -143,8 +143,9 @@ impl<K: Raster> ForceStage<K> {
     }
 
     /// Sets each moving vertex's destination (its displaced position, kept
-    /// in the domain); returns the largest displacement.
-    fn set_destinations(&mut self, complex: &Complex<K>) -> f64 {
+    /// in the domain) where it lies at least `min_move` away; returns the
+    /// largest displacement, of every vertex (the stopping rule's motion).
+    fn set_destinations(&mut self, complex: &Complex<K>, min_move: f64) -> f64 {
         self.dest.clear();
         let mut max_disp: f64 = 0.0;
         for (i, &d) in self.displacement.iter().enumerate() {
@@ -155,8 +156,8 @@ impl<K: Raster> ForceStage<K> {
             let p = complex.position(v);
             let target = complex.constrain(v, p + d);
             let d = (target - p).length();
-            if d > 0.0 {
-                max_disp = max_disp.max(d);
+            max_disp = max_disp.max(d);
+            if d > 0.0 && d >= min_move {
                 self.dest.set(v, target);
             }
         }

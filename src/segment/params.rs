@@ -15,6 +15,13 @@ pub const PLATEAU_ITERATIONS: usize = 10;
 /// once no vertex moves more than a twentieth of a pixel per iteration.
 pub const CONVERGE_PIXELS: f64 = 0.05;
 
+/// The 3D default of [`SegmentParams::min_move`]: vertices asked to move
+/// less than this fraction of L stay, as the stopping rule counts no motion
+/// below it ([`SegmentParams::converge_displacement`]'s default). On the 64³
+/// benchmark volumes it cuts a run's CPU time by about a third at the same
+/// mean Dice (`benches/RESULTS.md`, "Speed, 3D").
+pub const MIN_MOVE_3D: f64 = 0.02;
+
 /// The 2D sizing field freezes once the energy has not reached a new low
 /// for this many iterations (half the plateau: the last iterations polish
 /// the interfaces on a fixed mesh size).
@@ -178,6 +185,14 @@ pub struct SegmentParams {
     /// the energy has not reached a new low for 10 iterations, so that noisy
     /// runs settle. Evidence: `docs/parameters.md`.
     pub step_fraction: f64,
+    /// A vertex whose displacement of the iteration is below this fraction
+    /// of L stays where it is: below the motion the stopping rule counts
+    /// (`converge_displacement`), such moves are the noise's jitter about a
+    /// settled interface, and moving them makes the mesh improvement and the
+    /// integration work on the whole interface band every iteration. 0 (2D):
+    /// every vertex moves. 3D: 0.02 (see [`new_3d`](Self::new_3d)).
+    #[serde(default)]
+    pub min_move: f64,
     /// Converged when the largest displacement stays below this fraction of L ...
     pub converge_displacement: f64,
     /// ... and, if set, below this many pixels (2D default 0.05; `None` in
@@ -243,6 +258,7 @@ impl SegmentParams {
             rigidity: 5.0,
             elasticity: 0.0,
             step_fraction: 0.2,
+            min_move: 0.0,
             converge_displacement: 0.02,
             converge_pixels: Some(CONVERGE_PIXELS),
             converge_iterations: 5,
@@ -275,7 +291,7 @@ impl SegmentParams {
     /// iteration a few cells flip every iteration and the stopping rule never
     /// fires) and `flip_once` on (under strong noise each flip round
     /// relabelled interface voxels that the rigidity then smoothed back),
-    /// the energy plateau rule `converge_plateau` 10 (the σ = 0.2 phantoms
+    /// `min_move` 0.02 (vertices asked to move less than 0.02·L stay), the energy plateau rule `converge_plateau` 10 (the σ = 0.2 phantoms
     /// reach their Dice within 10–30 iterations, then spent 50–250 more
     /// fitting noise), and adaptive resolution from a coarse start (`L` at
     /// the interfaces, cells up to the smallest side / 10 elsewhere: 2.5–12×
@@ -286,6 +302,7 @@ impl SegmentParams {
             length_weight: if phases == 2 { 0.6 } else { 1.2 },
             flip_interval: 20,
             flip_once: true,
+            min_move: MIN_MOVE_3D,
             converge_pixels: None,
             converge_plateau: Some(PLATEAU_ITERATIONS),
             sizing: SizingParams {
@@ -383,6 +400,12 @@ impl SegmentParams {
             self.step_fraction,
             self.step_fraction > 0.0 && self.step_fraction <= 0.5,
             "must lie in (0, 0.5]",
+        )?;
+        check(
+            "min_move",
+            self.min_move,
+            self.min_move >= 0.0,
+            non_negative,
         )?;
         check(
             "converge_displacement",
