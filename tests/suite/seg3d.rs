@@ -70,7 +70,10 @@ fn vertices_asked_to_move_less_than_min_move_stay() {
     let (before, after, largest) = positions_after_one_step(0.0);
     assert_ne!(before, after, "without a threshold the interfaces move");
     let (before, after, reported) = positions_after_one_step(largest * 1.01);
-    assert_eq!(before, after, "no vertex was asked to move as far as the threshold");
+    assert_eq!(
+        before, after,
+        "no vertex was asked to move as far as the threshold"
+    );
     assert_eq!(reported, largest, "the reported motion is every vertex's");
 }
 
