@@ -54,12 +54,22 @@ pub struct Segmented {
 /// What the writers need beyond the arrays.
 #[derive(Clone, Debug)]
 pub(crate) enum Render {
-    /// The segmented image (under the overlay, in `image.vti`), the final
-    /// complex and the rank of each mesh label, for the VTK files.
-    Image(Image2, Box<Complex2>, Vec<u8>),
+    /// An image.
+    Image {
+        /// The segmented image as the overlay shows it.
+        shown: Image2,
+        /// Its values in the file's units (as `report.json` gives the
+        /// means), for `image.vti`: a viewer's probe and colour bar must read
+        /// what the file holds, not the loaded `[0, 1]` scale.
+        values: Vec<f32>,
+        /// The final complex.
+        complex: Box<Complex2>,
+        /// The rank of each mesh label.
+        order: Vec<u8>,
+    },
     /// A volume.
     Volume {
-        /// Its values, for `image.vti`.
+        /// Its values in the file's units, for `image.vti`.
         values: Option<Vec<f32>>,
         /// The final complex.
         complex: Box<Complex3>,
@@ -237,8 +247,13 @@ impl Segmented {
         let path = |name: &str| stage.path().join(name);
         let frame = &self.frame;
         match &self.render {
-            Render::Image(image, complex, order) => {
-                self.write_2d(image, &path, outputs)?;
+            Render::Image {
+                shown,
+                values,
+                complex,
+                order,
+            } => {
+                self.write_2d(shown, &path, outputs)?;
                 if outputs.mesh {
                     complex.write_mesh_vtu(path("mesh.vtu"), order, frame)?;
                 }
@@ -246,7 +261,7 @@ impl Segmented {
                     complex.write_interface_vtp(path("interface.vtp"), order, frame)?;
                 }
                 if outputs.image {
-                    write_vti(path("image.vti"), frame, "intensity", image.data())?;
+                    write_vti(path("image.vti"), frame, "intensity", values)?;
                 }
             }
             Render::Volume {

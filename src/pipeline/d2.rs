@@ -85,6 +85,17 @@ impl InputSummary {
     }
 }
 
+/// The image's values in the file's units (8/16-bit integers as stored,
+/// floats as they are), the units of `report.json`'s means.
+fn in_file_units(image: &Image2) -> Vec<f32> {
+    let t = image.sample_type();
+    image
+        .data()
+        .iter()
+        .map(|&v| t.to_original(f64::from(v)) as f32)
+        .collect()
+}
+
 /// The image as the overlay shows it: values outside `[0,1]` (float or
 /// signed data) mapped linearly onto `[0,1]`, other images unchanged.
 fn display_image<'i>(image: &'i Image2, report: &SegmentReport) -> std::borrow::Cow<'i, Image2> {
@@ -389,7 +400,12 @@ pub(crate) fn segment_image_then<T>(
         report: report_json,
         frame,
         measurements,
-        render: Render::Image(shown, Box::new(seg.complex().clone()), order),
+        render: Render::Image {
+            shown,
+            values: in_file_units(image),
+            complex: Box::new(seg.complex().clone()),
+            order,
+        },
         tiff_labels: matches!(&provenance.source, Source::File(path) if is_tiff(path)),
     };
     Ok((result, ready))

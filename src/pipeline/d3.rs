@@ -9,6 +9,7 @@ use super::{
 };
 use crate::dim::D3;
 use crate::error::{Error, Result};
+use crate::io::intensity::IntensityMap;
 use crate::io::{save_labels_tiff, Volume};
 use crate::phantom::noise::to_u8;
 use crate::phantom::Phantom3Kind;
@@ -72,6 +73,17 @@ struct Report<'a> {
     init_surface: Option<&'a Path>,
     junction_edges: usize,
     quality: QualitySummary,
+}
+
+/// The volume's values in the file's units (as the report's means), or on
+/// the loaded scale when the file's are unknown.
+fn in_file_units(volume: &Volume) -> Vec<f32> {
+    let map = volume.intensity().unwrap_or(IntensityMap::IDENTITY);
+    volume
+        .data()
+        .iter()
+        .map(|&v| map.original(f64::from(v)) as f32)
+        .collect()
 }
 
 /// The volume's intensity range and final phase means in the file's own
@@ -343,7 +355,7 @@ pub(crate) fn segment_volume_then<T>(
         frame,
         measurements,
         render: Render::Volume {
-            values: Some(volume.data().to_vec()),
+            values: Some(in_file_units(volume)),
             complex: Box::new(complex.clone()),
             order,
             nifti_header: volume.nifti_header().map(<[u8]>::to_vec),

@@ -159,3 +159,74 @@ fn the_mesh_and_labels_do_not_depend_on_the_unit_of_the_voxel_size() {
         assert!(agree > 0.99, "voxel unit {unit}: labels agree on {agree}");
     }
 }
+
+/// The values of an `image.vti` written by dsc-seg (one Float32 array,
+/// base64 with a UInt64 length header).
+fn vti_values(path: &std::path::Path) -> Vec<f32> {
+    use base64::{engine::general_purpose::STANDARD, Engine};
+    let text = std::fs::read_to_string(path).unwrap();
+    let start = text.find("format=\"binary\">").unwrap() + "format=\"binary\">".len();
+    let encoded = text[start..].split("</DataArray>").next().unwrap().trim();
+    // The length header is 8 bytes: 12 base64 characters with its padding.
+    let (header, data) = encoded.split_at(12);
+    let len = u64::from_le_bytes(STANDARD.decode(header).unwrap().try_into().unwrap());
+    let bytes = STANDARD.decode(data).unwrap();
+    assert_eq!(bytes.len() as u64, len);
+    bytes
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+        .collect()
+}
+
+fn value_range(v: &[f32]) -> (f32, f32) {
+    v.iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &x| {
+            (lo.min(x), hi.max(x))
+        })
+}
+
+/// `image.vti` holds what the file holds (Hounsfield units of a CT, the
+/// counts of a 16-bit image), so that a viewer's probe and colour bar read
+/// the same numbers as `report.json` and the input.
+#[test]
+fn image_vti_holds_the_input_values_in_its_units() {
+    let dir = tempfile::tempdir().unwrap();
+    // A CT-like volume in HU: air at -1000 around a ball of soft tissue at 40.
+    let ct = Volume::from_fn(16, 16, 16, |i, j, k| {
+        let d = distance([i as f64, j as f64, k as f64], [7.5; 3]);
+        if d < 5.0 {
+            40.0
+        } else {
+            -1000.0
+        }
+    });
+    let ct_path = dir.path().join("ct.nii.gz");
+    save_nifti(&ct_path, &ct).unwrap();
+    // A 16-bit image using a small part of its range.
+    let png_path = dir.path().join("counts.png");
+    image::ImageBuffer::<image::Luma<u16>, _>::from_fn(32, 32, |x, y| {
+        let inside = (x as f64 - 16.0).powi(2) + (y as f64 - 16.0).powi(2) < 64.0;
+        image::Luma([if inside { 3000u16 } else { 1000 }])
+    })
+    .save(&png_path)
+    .unwrap();
+    for (sub, input, expected) in [
+        ("segment3d", &ct_path, (-1000.0, 40.0)),
+        ("segment", &png_path, (1000.0, 3000.0)),
+    ] {
+        let out = dir.path().join(sub);
+        let o = crate::cli::bin()
+            .arg(sub)
+            .arg(input)
+            .args(["--quiet", "--outputs", "image", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let (lo, hi) = value_range(&vti_values(&out.join("image.vti")));
+        assert!(
+            (lo - expected.0).abs() < 0.01 && (hi - expected.1).abs() < 0.01,
+            "{sub}: image.vti spans {lo}..{hi}, the input {expected:?}"
+        );
+    }
+}
