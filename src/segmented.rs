@@ -197,6 +197,24 @@ impl Outputs {
         f
     }
 
+    /// Files in `dir` that a run with other outputs would have written and
+    /// this one does not: left from an earlier run, they no longer match
+    /// the new results beside them. Listed, not removed: `dir` may be a
+    /// folder of the user's own files with the same names.
+    pub fn earlier_outputs(&self, three_d: bool, dir: &Path) -> Vec<&'static str> {
+        let mut written = self.files(three_d);
+        if self.labels {
+            written.extend(["labels.tif", NIFTI_LABELS]);
+        }
+        let mut all = Outputs::ALL.files(three_d);
+        all.extend(["labels.tif", NIFTI_LABELS]);
+        all.sort_unstable();
+        all.dedup();
+        all.into_iter()
+            .filter(|name| !written.contains(name) && dir.join(name).is_file())
+            .collect()
+    }
+
     /// [`files`](Self::files) as a run on `input` writes them: a NIfTI
     /// volume's labels are `labels.nii.gz` instead of `labels.tif`, and a 2D
     /// TIFF's labels come as `labels.tif` too.

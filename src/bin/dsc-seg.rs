@@ -209,6 +209,7 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
     };
     let report = run_segment(&job)?;
     print_warnings(&report);
+    print_earlier_outputs(&outputs.earlier_outputs(false, &job.out), &job.out);
     if !a.quiet {
         print_summary(&report, "cells", &job.out);
     }
@@ -253,6 +254,7 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
     };
     let report = run_segment3d(&job)?;
     print_warnings(&report);
+    print_earlier_outputs(&outputs.earlier_outputs(true, &job.out), &job.out);
     if !a.quiet {
         print_summary(&report, "tets", &job.out);
     }
@@ -312,6 +314,18 @@ fn task_is_3d(task: &Task) -> bool {
 fn print_warnings(report: &dsc_seg::segment::SegmentReport) {
     for w in &report.warnings {
         eprintln!("warning: {w}");
+    }
+}
+
+/// Names the files of an earlier run that this one left beside its own
+/// outputs (see [`Outputs::earlier_outputs`]), quiet or not.
+fn print_earlier_outputs(names: &[&str], out: &std::path::Path) {
+    if !names.is_empty() {
+        eprintln!(
+            "note: {} in {} are from an earlier run, not this one",
+            names.join(", "),
+            out.display()
+        );
     }
 }
 

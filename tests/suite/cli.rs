@@ -869,3 +869,41 @@ fn pixel_size_from_spacing_and_tiff_resolution_reaches_the_outputs() {
     let tif_labels = image::open(&labels).unwrap().to_luma8();
     assert_eq!(png_labels.as_raw(), tif_labels.as_raw());
 }
+
+/// A rerun with fewer outputs into the same folder names the files it left
+/// from the earlier run (it does not delete them: they may be the user's).
+#[test]
+fn a_rerun_with_fewer_outputs_names_the_earlier_files() {
+    let d = tmp();
+    let png = write_image(d.path(), 40, 30);
+    let out = d.path().join("out");
+    let run = |outputs: &str| {
+        let o = bin()
+            .arg("segment")
+            .arg(&png)
+            .args([
+                "--quiet",
+                "--max-iterations",
+                "2",
+                "--outputs",
+                outputs,
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    assert!(!run("all").contains("note:"));
+    let second = run("labels,report");
+    assert!(
+        second.contains("note: ") && second.contains("overlay.png") && second.contains("mesh.vtu"),
+        "{second}"
+    );
+    assert!(
+        !second.contains("labels.png") && !second.contains("report.json"),
+        "{second}"
+    );
+    assert!(out.join("overlay.png").is_file(), "not deleted");
+}
