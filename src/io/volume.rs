@@ -772,17 +772,19 @@ fn parse_nifti(path: &Path, b: &[u8]) -> Result<Volume> {
 
 /// The index-to-world affine of a NIfTI-1 header: the sform when its code
 /// is set, else the qform (quaternion, offsets, `pixdim` and the `qfac`
-/// sign in `pixdim[0]`), else `pixdim` alone (NIfTI's "method 1").
+/// sign in `pixdim[0]`), else `pixdim` alone (NIfTI's "method 1"). A form
+/// that cannot place voxels (a NaN, or axes that collapse: a zero or
+/// singular matrix, as some converters write) is passed over for the next;
+/// `report.json`'s frame source says which was used.
 fn nifti_affine(
     f32_at: &dyn Fn(usize) -> f32,
     i16_at: &dyn Fn(usize) -> i16,
     pixdim: [f64; 3],
 ) -> (Affine, FrameSource) {
     let f = |o: usize| f64::from(f32_at(o));
-    let finite = |a: &Affine| a.iter().flatten().all(|v| v.is_finite());
     if i16_at(254) > 0 {
         let a: Affine = std::array::from_fn(|r| std::array::from_fn(|c| f(280 + 16 * r + 4 * c)));
-        if finite(&a) {
+        if places_voxels(&a) {
             return (a, FrameSource::NiftiSform);
         }
     }
@@ -817,7 +819,7 @@ fn nifti_affine(
                 offset[r],
             ]
         });
-        if finite(&q) {
+        if places_voxels(&q) {
             return (q, FrameSource::NiftiQform);
         }
     }
@@ -848,6 +850,19 @@ fn rescale_nifti_axes(header: &mut [u8], ratio: [f64; 3]) {
             scale(280 + 16 * row + 4 * c, r);
         }
     }
+}
+
+/// Whether `a` maps voxels to distinct places: finite, and its three axes
+/// span space (the determinant is not negligible against the product of
+/// the axes' lengths).
+fn places_voxels(a: &Affine) -> bool {
+    let column = |c: usize| [a[0][c], a[1][c], a[2][c]];
+    let length = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let (x, y, z) = (column(0), column(1), column(2));
+    let det = x[0] * (y[1] * z[2] - y[2] * z[1]) - y[0] * (x[1] * z[2] - x[2] * z[1])
+        + z[0] * (x[1] * y[2] - x[2] * y[1]);
+    let scale = length(x) * length(y) * length(z);
+    a.iter().flatten().all(|v| v.is_finite()) && scale > 0.0 && det.abs() > 1e-6 * scale
 }
 
 /// The spatial unit of `xyzt_units` (unknown is read as mm, as most tools do).
@@ -1248,6 +1263,38 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// An sform that collapses the axes (all zero, as some converters
+    /// write with the code still set) is passed over for `pixdim`.
+    #[test]
+    fn a_singular_sform_is_passed_over() {
+        let dir = tempfile::tempdir().unwrap();
+        let v = Volume::from_fn(4, 3, 2, |x, _, _| x as f32 / 3.0)
+            .with_spacing([0.5, 0.5, 2.0])
+            .with_affine(
+                [
+                    [0.5, 0.0, 0.0, 1.0],
+                    [0.0, 0.5, 0.0, 2.0],
+                    [0.0, 0.0, 2.0, 3.0],
+                ],
+                FrameSource::NiftiSform,
+            );
+        let p = dir.path().join("v.nii");
+        save_nifti(&p, &v).unwrap();
+        assert_eq!(
+            Volume::load(&p).unwrap().frame().source,
+            FrameSource::NiftiSform
+        );
+        let mut bytes = std::fs::read(&p).unwrap();
+        // The third axis collapses onto the first: x and z map to one line.
+        for (o, value) in [(288, 0.5f32), (304, 0.0), (320, 0.0)] {
+            bytes[o..o + 4].copy_from_slice(&value.to_le_bytes());
+        }
+        std::fs::write(&p, &bytes).unwrap();
+        let frame = Volume::load(&p).unwrap().frame();
+        assert_eq!(frame.source, FrameSource::NiftiPixdim);
+        assert_eq!(frame.spacing, [0.5, 0.5, 2.0]);
     }
 
     #[test]
