@@ -3,7 +3,7 @@
 use super::adaptive::{AdaptiveSizing, Sizes};
 use super::contrast::phase_contrast;
 use super::error::SegmentError;
-use super::force_stage::ForceStage;
+use super::force_stage::{ForceStage, Reach};
 use super::image::ImageView;
 use super::integrate::{CellCache, CellStats, PhaseStats};
 use super::intensity::IntensityStats;
@@ -43,6 +43,11 @@ pub struct IterationRecord {
     pub flips: usize,
     /// Largest requested displacement, in units of L.
     pub max_displacement: f64,
+    /// Largest requested displacement across the interface, in units of
+    /// L: in 2D a two-phase interface vertex's motion along the interface
+    /// (the bending term evening out the vertices' spacing) is left out, as
+    /// it moves no pixel to the other side; the stopping rule reads this.
+    pub max_displacement_across: f64,
     /// Phase means the forces used.
     pub means: Vec<Option<f64>>,
     /// Triple junctions with an external force, and crossings without (of
@@ -607,7 +612,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         // length term the forces measure below.
         let data_energy = self.data_energy();
 
-        let (length, max_disp) = forces.unwrap_or_else(|| {
+        let (length, reach) = forces.unwrap_or_else(|| {
             let t = Instant::now();
             let computed = self.forces_and_destinations(iteration);
             self.times.forces += t.elapsed().as_secs_f64();
@@ -629,7 +634,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             data_energy,
             length,
             flips,
-            max_displacement: max_disp / l,
+            max_displacement: reach.largest / l,
+            max_displacement_across: reach.across / l,
             means: self.phases.mean.clone(),
             junctions: self
                 .models
@@ -656,7 +662,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 self.stalled = 0;
             }
         }
-        if flips == 0 && self.settled(rec.max_displacement) {
+        if flips == 0 && self.settled(rec.max_displacement_across) {
             self.quiet_iterations += 1;
         } else {
             self.quiet_iterations = 0;
@@ -665,8 +671,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         rec
     }
 
-    /// Whether a step whose largest displacement was `max_displacement` (a
-    /// fraction of L) moved little enough to count towards convergence:
+    /// Whether a step whose largest displacement across the interface was
+    /// `max_displacement` (a fraction of L) moved little enough to count
+    /// towards convergence:
     /// below [`converge_displacement`](SegmentParams::converge_displacement)
     /// and, if set, [`converge_pixels`](SegmentParams::converge_pixels).
     fn settled(&self, max_displacement: f64) -> bool {
@@ -686,8 +693,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// force term with state of its own sees one more call.
     pub fn compute_forces(&mut self) -> f64 {
         self.integrate();
-        let (_, max_disp) = self.forces_and_destinations(self.history.len() + 1);
-        max_disp / self.dsc.edge_length
+        let (_, reach) = self.forces_and_destinations(self.history.len() + 1);
+        reach.largest / self.dsc.edge_length
     }
 
     /// Phase means closer than this are duplicates: 0.3 times the noise's
@@ -803,7 +810,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// the helper thread meanwhile, whether a label rule would change a
     /// label ([`would_relabel`](super::model::LabelRule::would_relabel); a rule that cannot tell counts
     /// as yes, and turns these predictions off for the run).
-    fn forces_beside_flip_check(&mut self, iteration: usize) -> ((f64, f64), bool) {
+    fn forces_beside_flip_check(&mut self, iteration: usize) -> ((f64, Reach), bool) {
         self.evaluations += 1;
         let Parts {
             state,
@@ -815,7 +822,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         } = self.parts(iteration);
         let complex = &*complex;
         let (terms, rules) = (&mut models.forces, &mut models.rules);
-        let (max_disp, answers) = helper.join(
+        let (reach, answers) = helper.join(
             || force.run(terms, complex, &state, step),
             || {
                 rules
@@ -824,7 +831,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                     .try_fold(false, |any, a| a.map(|a| any || a))
             },
         );
-        let computed = (self.interface_length(), max_disp);
+        let computed = (self.interface_length(), reach);
         match answers {
             Some(would_flip) => (computed, would_flip),
             None => {
@@ -836,8 +843,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
 
     /// Computes the forces of iteration `iteration` and fills the
     /// destinations; returns the interface measure and the largest
-    /// displacement (pixels).
-    fn forces_and_destinations(&mut self, iteration: usize) -> (f64, f64) {
+    /// displacements (pixels).
+    fn forces_and_destinations(&mut self, iteration: usize) -> (f64, Reach) {
         self.evaluations += 1;
         let Parts {
             state,
@@ -847,8 +854,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             step,
             ..
         } = self.parts(iteration);
-        let max_disp = force.run(&mut models.forces, complex, &state, step);
-        (self.interface_length(), max_disp)
+        let reach = force.run(&mut models.forces, complex, &state, step);
+        (self.interface_length(), reach)
     }
 
     /// The interface measure of the current mesh for the energy's length

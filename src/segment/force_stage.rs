@@ -2,8 +2,9 @@
 //! destinations of the deformation.
 
 use super::model::{ForceTerm, IterationState, TermKind};
+use super::normal_motion::across_interface;
 use super::raster::Raster;
-use crate::complex::{Complex, VertexId};
+use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::Point;
 use crate::dsc::Destinations;
 
@@ -26,6 +27,18 @@ pub(crate) struct ForceStage<K: Raster> {
     term_kinds: Vec<TermKind>,
     /// Where the deformation moves the vertices.
     pub dest: Destinations<K>,
+    /// Scratch space of [`across_interface`].
+    star: Vec<CellId>,
+}
+
+/// The largest displacement of a force evaluation's destinations, in pixels.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Reach {
+    /// Of any vertex.
+    pub largest: f64,
+    /// Across the interface ([`across_interface`]): the motion that can move
+    /// a pixel to the other side.
+    pub across: f64,
 }
 
 impl<K: Raster> ForceStage<K> {
@@ -38,18 +51,19 @@ impl<K: Raster> ForceStage<K> {
             applied: Vec::new(),
             term_kinds: Vec::new(),
             dest: Destinations::new(complex),
+            star: Vec::new(),
         }
     }
 
     /// Computes every term's forces on `complex` and fills the destinations
-    /// with a step of `step`·L; returns the largest displacement (pixels).
+    /// with a step of `step`·L; returns the largest displacements.
     pub fn run(
         &mut self,
         terms: &mut [Box<dyn ForceTerm<K>>],
         complex: &Complex<K>,
         state: &IterationState<'_, '_>,
         step: f64,
-    ) -> f64 {
+    ) -> Reach {
         let l = state.edge_length;
         let reference = self.add_terms(terms, complex, state);
         // Step: the largest external displacement is `step`·L once a force
@@ -144,10 +158,10 @@ impl<K: Raster> ForceStage<K> {
 
     /// Sets each moving vertex's destination (its displaced position, kept
     /// in the domain) where it lies at least `min_move` away; returns the
-    /// largest displacement, of every vertex (the stopping rule's motion).
-    fn set_destinations(&mut self, complex: &Complex<K>, min_move: f64) -> f64 {
+    /// largest displacements, of every vertex (the stopping rule's motion).
+    fn set_destinations(&mut self, complex: &Complex<K>, min_move: f64) -> Reach {
         self.dest.clear();
-        let mut max_disp: f64 = 0.0;
+        let mut reach = Reach::default();
         for (i, &d) in self.displacement.iter().enumerate() {
             let v = VertexId(i as u32);
             if d == K::Point::zero() || !complex.is_vertex_alive(v) {
@@ -155,12 +169,19 @@ impl<K: Raster> ForceStage<K> {
             }
             let p = complex.position(v);
             let target = complex.constrain(v, p + d);
-            let d = (target - p).length();
-            max_disp = max_disp.max(d);
-            if d > 0.0 && d >= min_move {
+            let d = target - p;
+            let length = d.length();
+            reach.largest = reach.largest.max(length);
+            // (the motion across is at most the length: only a longer step
+            // can raise the largest)
+            if length > reach.across {
+                let across = across_interface(complex, v, d, &mut self.star);
+                reach.across = reach.across.max(across);
+            }
+            if length > 0.0 && length >= min_move {
                 self.dest.set(v, target);
             }
         }
-        max_disp
+        reach
     }
 }

@@ -53,6 +53,7 @@ pub mod intensity;
 pub mod measurements;
 pub mod model;
 pub mod models;
+mod normal_motion;
 pub mod params;
 pub mod partial_volume;
 pub mod raster;

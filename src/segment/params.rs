@@ -12,7 +12,8 @@ pub const MAX_PHASES: usize = 64;
 pub const PLATEAU_ITERATIONS: usize = 10;
 
 /// The 2D default of [`SegmentParams::converge_pixels`]: a run has converged
-/// once no vertex moves more than a twentieth of a pixel per iteration.
+/// once no vertex moves the interface across itself by more than a
+/// twentieth of a pixel per iteration.
 pub const CONVERGE_PIXELS: f64 = 0.05;
 
 /// The 3D default of [`SegmentParams::min_move`]: vertices asked to move
@@ -193,7 +194,9 @@ pub struct SegmentParams {
     /// every vertex moves. 3D: 0.02 (see [`new_3d`](Self::new_3d)).
     #[serde(default)]
     pub min_move: f64,
-    /// Converged when the largest displacement stays below this fraction of L ...
+    /// Converged when the largest displacement stays below this fraction of L
+    /// (in 2D its component across the interface: sliding along it, as the
+    /// bending term evens out the vertices' spacing, moves no pixel) ...
     pub converge_displacement: f64,
     /// ... and, if set, below this many pixels (2D default 0.05; `None` in
     /// 3D). Dice counts pixels, not fractions of L: at 0.02·L alone a 512²
