@@ -341,7 +341,7 @@ pub(crate) fn segment_image_then<T>(
     let mut report = run_with_progress(&mut seg, params.max_iterations, quiet);
     report
         .warnings
-        .extend(phase_choice.as_ref().and_then(PhaseChoice::cap_warning));
+        .extend(phase_choice.iter().flat_map(PhaseChoice::warnings));
     let segment = t_seg.elapsed().as_secs_f64();
 
     let labels = seg.label_image();

@@ -71,6 +71,30 @@ pub struct PhaseChoice {
 }
 
 impl PhaseChoice {
+    /// What the user must know about the choice: it stopped at the cap
+    /// ([`cap_warning`](Self::cap_warning)) or at the floor
+    /// ([`floor_warning`](Self::floor_warning)).
+    pub fn warnings(&self) -> Vec<String> {
+        self.cap_warning()
+            .into_iter()
+            .chain(self.floor_warning())
+            .collect()
+    }
+
+    /// A warning when two phases, the fewest there are, failed the tests of
+    /// regions: two is taken because one is no segmentation, not because
+    /// the data show two (pure noise, or a smooth ramp, split anywhere).
+    pub fn floor_warning(&self) -> Option<String> {
+        let first = self.trials.first()?;
+        let reason = first.reason.as_ref()?;
+        (self.phases == 2 && first.phases == 2).then(|| {
+            format!(
+                "--phases auto found no two distinct regions ({reason}); the image may hold \
+                 a single phase"
+            )
+        })
+    }
+
     /// A warning when the choice is the largest count tried and that count
     /// was accepted: the search stopped at the cap, not at the data, so the
     /// image may hold more phases, or be no piecewise-constant image at all

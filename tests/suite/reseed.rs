@@ -101,3 +101,46 @@ fn a_choice_at_the_cap_says_so() {
     let warning = choice.cap_warning().expect("a warning at the cap");
     assert!(warning.contains("largest count tried (3)"), "{warning}");
 }
+
+/// Pure noise has no two regions: `--phases auto` still returns two phases
+/// (one is no segmentation) and says the image may hold a single one; a
+/// two-phase image gets no such warning.
+#[test]
+fn a_choice_at_the_floor_says_so() {
+    use dsc_seg::dim::D2;
+    use dsc_seg::segment::auto::choose_phases;
+    let n = 96;
+    // Deterministic white-ish noise about 0.5 (a linear congruential sequence).
+    let mut state: u64 = 12345;
+    let mut uniform = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f32 / (1u64 << 53) as f32
+    };
+    let noise: Vec<f32> = (0..n * n)
+        .map(|_| 0.5 + 0.1 * (uniform() + uniform() + uniform() - 1.5))
+        .collect();
+    let params = |k| {
+        let mut p = SegmentParams::new(k);
+        p.max_iterations = 100;
+        p
+    };
+    let view = ImageView::new_2d(n, n, &noise).unwrap();
+    let choice = choose_phases::<D2>(view, 3, params).unwrap();
+    assert_eq!(choice.phases, 2, "{choice:?}");
+    let warning = choice.floor_warning().expect("a warning at the floor");
+    assert!(warning.contains("single phase"), "{warning}");
+
+    let disk: Vec<f32> = (0..n * n)
+        .map(|i| {
+            let (x, y) = ((i % n) as f32 - 48.0, (i / n) as f32 - 48.0);
+            let level = if x * x + y * y < 400.0 { 0.7 } else { 0.3 };
+            level + 0.1 * (uniform() + uniform() + uniform() - 1.5)
+        })
+        .collect();
+    let view = ImageView::new_2d(n, n, &disk).unwrap();
+    let choice = choose_phases::<D2>(view, 3, params).unwrap();
+    assert_eq!(choice.phases, 2, "{choice:?}");
+    assert_eq!(choice.warnings(), Vec::<String>::new());
+}
