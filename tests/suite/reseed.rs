@@ -108,19 +108,11 @@ fn a_choice_at_the_cap_says_so() {
 #[test]
 fn a_choice_at_the_floor_says_so() {
     use dsc_seg::dim::D2;
+    use dsc_seg::phantom::noise::add_gaussian_noise;
     use dsc_seg::segment::auto::choose_phases;
     let n = 96;
-    // Deterministic white-ish noise about 0.5 (a linear congruential sequence).
-    let mut state: u64 = 12345;
-    let mut uniform = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 11) as f32 / (1u64 << 53) as f32
-    };
-    let noise: Vec<f32> = (0..n * n)
-        .map(|_| 0.5 + 0.1 * (uniform() + uniform() + uniform() - 1.5))
-        .collect();
+    let mut noise = vec![0.5f32; n * n];
+    add_gaussian_noise(&mut noise, 0.1, 1);
     let params = |k| {
         let mut p = SegmentParams::new(k);
         p.max_iterations = 100;
@@ -132,13 +124,17 @@ fn a_choice_at_the_floor_says_so() {
     let warning = choice.floor_warning().expect("a warning at the floor");
     assert!(warning.contains("single phase"), "{warning}");
 
-    let disk: Vec<f32> = (0..n * n)
+    let mut disk: Vec<f32> = (0..n * n)
         .map(|i| {
             let (x, y) = ((i % n) as f32 - 48.0, (i / n) as f32 - 48.0);
-            let level = if x * x + y * y < 400.0 { 0.7 } else { 0.3 };
-            level + 0.1 * (uniform() + uniform() + uniform() - 1.5)
+            if x * x + y * y < 400.0 {
+                0.7
+            } else {
+                0.3
+            }
         })
         .collect();
+    add_gaussian_noise(&mut disk, 0.1, 2);
     let view = ImageView::new_2d(n, n, &disk).unwrap();
     let choice = choose_phases::<D2>(view, 3, params).unwrap();
     assert_eq!(choice.phases, 2, "{choice:?}");
