@@ -8,12 +8,13 @@ use super::image::ImageView;
 use super::integrate::{CellCache, CellStats, PhaseStats};
 use super::intensity::IntensityStats;
 use super::model::{Flow, IterationState, Models};
-use super::models::{GivenMesh, PaperField, Rigidity};
+use super::models::{GivenMesh, PaperField, RegionForce, Rigidity};
 use super::params::{
     contrast_edge_length, contrast_rigidity, sample_step, smallest_extent, SegmentParams,
 };
 use super::raster::Raster;
 use super::reseed::{any_lost, lost_phases, merge_phase, split_most_structured_phase, LostPhase};
+use super::smoothing::force_smoothing;
 use super::thresholds::smallest_class_gap;
 use crate::complex::Complex;
 use crate::dsc::{Destinations, DscParams, DscWorkspace};
@@ -162,6 +163,11 @@ pub struct SegmentReport {
     /// against the image's noise ([`contrast_rigidity`]); `None` without a
     /// rigidity term.
     pub rigidity: Option<f64>,
+    /// The standard deviation, in pixels, of the Gaussian the image the
+    /// region force samples was smoothed with (2D on the uniform mesh, from
+    /// the image's noise: [`force_smoothing`]; 0 for none); `None` without
+    /// the region force.
+    pub force_smoothing: Option<f64>,
     /// The input's intensity figures (range, robust range, noise estimate).
     pub intensity: IntensityStats,
     /// The thresholds of the initialisation, in the input's units: the
@@ -306,6 +312,12 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let l = Self::edge_length(&params, &image, &intensity, gap);
         if let (Some(gap), Some(rigidity)) = (gap, models.force_mut::<Rigidity<K>>()) {
             rigidity.beta = contrast_rigidity(rigidity.beta, intensity.noise, gap);
+        }
+        // (not on the adaptive mesh: it refines to resolve the detail a
+        // smoothed image would blur)
+        let smoothing = gap.filter(|_| !params.sizing.adaptive);
+        if let (Some(gap), Some(region)) = (smoothing, models.force_mut::<RegionForce<K>>()) {
+            region.sample_smoothed(&image, force_smoothing(intensity.noise, gap));
         }
         let dsc = DscParams::new::<K>(l);
         let sizes = (params.sizing.adaptive).then(|| {
@@ -969,6 +981,10 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             final_energy,
             length_weight_abs: self.nu,
             rigidity: self.models.force::<Rigidity<K>>().map(|r| r.beta),
+            force_smoothing: self
+                .models
+                .force::<RegionForce<K>>()
+                .map(RegionForce::smoothing),
             intensity: self.intensity.clone(),
             initial_thresholds: self.initial_thresholds.clone(),
             reseeds: self.reseeds,

@@ -14,6 +14,8 @@
 //! - [`thresholds`]: least-variance histogram splits (multi-Otsu, k-means++);
 //! - [`init`]: histogram, range/interval, disk and label-image initialisations;
 //! - [`forces`]: region forces (eqs. 5–7) and rigidity (eq. 2);
+//! - [`smoothing`]: the image the region force samples (in 2D under noise,
+//!   smoothed by a Gaussian that follows the noise);
 //! - `force_stage`: an iteration's force terms summed, its step and the
 //!   destinations of the deformation;
 //! - [`auto`]: the number of phases chosen from the data (`--phases auto`);
@@ -59,6 +61,7 @@ pub mod partial_volume;
 pub mod raster;
 pub mod relaxed_length;
 pub mod reseed;
+pub mod smoothing;
 pub mod thresholds;
 
 pub use driver::{IterationRecord, SegmentReport, Segmentation, StageTimes, StopReason};

@@ -9,10 +9,12 @@ use crate::segment::cluster_flips::ClusterFlipper;
 use crate::segment::error::SegmentError;
 use crate::segment::flips::Flipper;
 use crate::segment::forces::{ForceField, ForceSettings};
+use crate::segment::image::ImageView;
 use crate::segment::init::initialise;
 use crate::segment::model::{ForceTerm, Initialiser, IterationState, LabelRule, TermKind};
 use crate::segment::params::{ForceModel, Init, SegmentParams};
 use crate::segment::raster::Raster;
+use crate::segment::smoothing::ForceImage;
 use crate::segment::thresholds::split_histogram;
 use std::sync::{Arc, Mutex, MutexGuard};
 
@@ -35,6 +37,8 @@ pub struct PaperField<K: Raster> {
 struct CachedField<K: Raster> {
     field: ForceField<K>,
     settings: ForceSettings,
+    /// What the region force samples.
+    image: ForceImage,
     /// The force evaluation the field was computed for.
     computed_for: Option<u64>,
 }
@@ -47,6 +51,7 @@ impl<K: Raster> PaperField<K> {
             shared: Arc::new(Mutex::new(CachedField {
                 field: ForceField::new(),
                 settings,
+                image: ForceImage::default(),
                 computed_for: None,
             })),
         }
@@ -76,12 +81,12 @@ impl<K: Raster> PaperField<K> {
     ) -> MutexGuard<'_, CachedField<K>> {
         let mut cached = self.lock();
         if cached.computed_for != Some(state.evaluation) {
-            let mut settings = cached.settings;
+            let c = &mut *cached;
+            let mut settings = c.settings;
             settings.equal_means = 1e-6 * (state.range.1 - state.range.0);
-            cached
-                .field
-                .compute(complex, state.image, state.phases, &settings);
-            cached.computed_for = Some(state.evaluation);
+            let image = c.image.view(state.image);
+            c.field.compute(complex, &image, state.phases, &settings);
+            c.computed_for = Some(state.evaluation);
         }
         cached
     }
@@ -170,6 +175,22 @@ impl<K: Raster> RegionForce<K> {
     /// The field this term reads (shared with the terms built with it).
     pub fn field(&self) -> &PaperField<K> {
         &self.field
+    }
+
+    /// From now on the force samples `image` smoothed by a Gaussian of
+    /// standard deviation `sigma` pixels (2D; 0: `image` as it is; see
+    /// [`crate::segment::smoothing`]). The driver sets it from the image's
+    /// noise.
+    pub fn sample_smoothed(&mut self, image: &ImageView<'_>, sigma: f64) {
+        let mut cached = self.field.lock();
+        cached.image = ForceImage::smoothed(image, sigma);
+        cached.computed_for = None;
+    }
+
+    /// The standard deviation in pixels of the Gaussian the sampled image
+    /// was smoothed with (0: none).
+    pub fn smoothing(&self) -> f64 {
+        self.field.lock().image.sigma()
     }
 }
 
