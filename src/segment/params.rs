@@ -19,8 +19,10 @@ pub const CONVERGE_PIXELS: f64 = 0.05;
 /// The 3D default of [`SegmentParams::min_move`]: vertices asked to move
 /// less than this fraction of L stay, as the stopping rule counts no motion
 /// below it ([`SegmentParams::converge_displacement`]'s default). On the 64³
-/// benchmark volumes it cuts a run's CPU time by about a third at the same
-/// mean Dice (`benches/RESULTS.md`, "Speed, 3D").
+/// and 128³ benchmark volumes it cuts a run's CPU time by about a third at the
+/// same mean Dice; on the brain phantom, whose interfaces still travel when
+/// the step is halved, it costs Dice (0.9664 against 0.9685) and iterations
+/// (91 against 73) (`benches/RESULTS.md`, "Speed, 3D").
 pub const MIN_MOVE_3D: f64 = 0.02;
 
 /// The 2D sizing field freezes once the energy has not reached a new low
