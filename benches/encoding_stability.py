@@ -3,7 +3,8 @@
 segmented as 8-bit TIFF, as 16-bit TIFF with 64 levels (a lossy
 re-quantisation), and as float32 TIFF with a uniform perturbation of
 ±0.01 and ±0.1 grey levels (of 255) added, with the 3D default (adaptive
-mesh from a coarse start) and with `--uniform`. Prints the mean Dice of each
+mesh from a coarse start, with the fine finish of two-phase runs), with
+`--no-fine-finish` and with `--uniform`. Prints the mean Dice of each
 run against the 8-bit run of the same mode, and against the ground truth.
 
 usage (from the repository root, after `cargo build --release` and
@@ -24,7 +25,7 @@ BIN = os.path.join(os.path.dirname(__file__), "..", "target", "release", "dsc-se
 
 # (phantom, side, phases) at σ = 0.1, noise seed 2.
 VOLUMES = [("torus", 48, 2), ("two_balls", 48, 2), ("hollow_sphere", 48, 2), ("four_phase", 64, 4)]
-MODES = {"default": [], "uniform": ["--uniform"]}
+MODES = {"default": [], "no finish": ["--no-fine-finish"], "uniform": ["--uniform"]}
 
 
 def mean_dice(a, b, phases):
@@ -57,11 +58,11 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--modes", nargs="*", choices=list(MODES), default=list(MODES))
     ap.add_argument("--edge-lengths", type=float, nargs="*", default=[],
-                    help="also the default with these interface edge lengths L (voxels)")
+                    help="also --no-fine-finish with these interface edge lengths L (voxels)")
     a = ap.parse_args()
     modes = {m: MODES[m] for m in a.modes}
     for length in a.edge_lengths:
-        modes[f"default, L = {length:g}"] = ["--edge-length", str(length)]
+        modes[f"no finish, L = {length:g}"] = ["--no-fine-finish", "--edge-length", str(length)]
     os.makedirs(a.out, exist_ok=True)
     print("| volume | mode | re-encoding | Dice vs 8-bit run | Dice vs truth (8-bit run's) |")
     print("|---|---|---|---|---|")
@@ -73,7 +74,7 @@ def main():
         truth = tifffile.imread(os.path.join(data, name + "_labels.tif"))
         volume = tifffile.imread(eight).astype(np.float64)
         for mode, extra in modes.items():
-            tag = mode.replace(", ", "_").replace(" = ", "")
+            tag = mode.replace(", ", "_").replace(" = ", "").replace(" ", "_")
             base = segment(eight, phases, extra, os.path.join(data, f"{tag}_8bit"))
             base_truth = mean_dice(base, truth, phases)
             for what, encoded in encodings(volume).items():

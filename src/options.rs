@@ -276,6 +276,12 @@ pub struct Segment3dOptions {
     /// on the three- and four-phase phantoms [default: 0]
     #[arg(long, value_name = "N")]
     pub refine_start: Option<usize>,
+    /// Stop when the stopping rule is met, without the fine finish of the
+    /// two-phase default (the interfaces refined to L/2 for 3 more
+    /// iterations, so that data differing by a re-quantisation give the
+    /// same labels)
+    #[arg(long)]
+    pub no_fine_finish: bool,
     /// The evolution's options.
     #[command(flatten)]
     pub evolution: EvolutionArgs,
@@ -299,6 +305,9 @@ impl Segment3dOptions {
         }
         if let Some(n) = self.refine_start {
             params.sizing.start_refinements = n;
+        }
+        if self.no_fine_finish {
+            params.sizing.finish = None;
         }
         self.evolution.apply(&mut params);
         let init = match implied_start(

@@ -243,6 +243,9 @@ pub struct Segmentation<'a, K: Raster> {
     /// Iterations since the energy last reached a new low (not reset when
     /// the step is halved): the plateau of [`SegmentParams::converge_plateau`].
     since_new_low: usize,
+    /// Iterations of the fine finish still to run (`None`: not begun; see
+    /// [`Finish`](super::adaptive::Finish)).
+    finish_left: Option<usize>,
 }
 
 impl<'a, K: Raster> Segmentation<'a, K> {
@@ -407,6 +410,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             best_energy: f64::INFINITY,
             stalled: 0,
             since_new_low: 0,
+            finish_left: None,
         };
         s.step = s.params.step_fraction;
         s.nu = s.length_weight();
@@ -600,8 +604,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let iteration = self.history.len() + 1;
         self.integrate();
 
-        let flips_due =
-            self.params.label_flips && (iteration - 1) % self.params.flip_interval.max(1) == 0;
+        let flips_due = self.params.label_flips
+            && (iteration - 1) % self.params.flip_interval.max(1) == 0
+            && self.finish_left.is_none();
         // Most iterations flip nothing: after one that flipped nothing, the
         // rules only check, beside the forces, whether they would flip.
         let mut forces = None;
@@ -679,8 +684,31 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         } else {
             self.quiet_iterations = 0;
         }
+        self.advance_finish();
         self.history.push(rec.clone());
         rec
+    }
+
+    /// Counts down the fine finish, or begins it once the stopping rule is
+    /// met: the next deform refines the interfaces to a fraction of `L`.
+    fn advance_finish(&mut self) {
+        let Some(finish) = self.params.sizing.finish else {
+            return;
+        };
+        if let Some(left) = &mut self.finish_left {
+            *left = left.saturating_sub(1);
+        } else if self.stopping_rule_met() {
+            if let Some(adaptive) = &mut self.adaptive {
+                adaptive.refine_interfaces(finish.interface_fraction * self.dsc.edge_length);
+                self.finish_left = Some(finish.iterations);
+            }
+        }
+    }
+
+    /// Whether the run ends with a fine finish (adaptive runs with
+    /// [`SizingParams::finish`](super::adaptive::SizingParams::finish)).
+    fn has_finish(&self) -> bool {
+        self.params.sizing.finish.is_some() && self.adaptive.is_some()
     }
 
     /// Whether a step whose largest displacement across the interface was
@@ -884,8 +912,18 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
     }
 
-    /// Whether the stopping rule is met.
+    /// Whether the stopping rule is met and the fine finish, if any, has
+    /// run.
     pub fn converged(&self) -> bool {
+        if self.has_finish() {
+            self.finish_left == Some(0)
+        } else {
+            self.stopping_rule_met()
+        }
+    }
+
+    /// Whether the stopping rule (displacement or energy plateau) is met.
+    fn stopping_rule_met(&self) -> bool {
         self.quiet_iterations >= self.params.converge_iterations
             || (self
                 .params

@@ -1,6 +1,6 @@
 //! The segmentation's parameters, with documented defaults.
 
-use super::adaptive::SizingParams;
+use super::adaptive::{Finish, SizingParams};
 use super::error::SegmentError;
 use serde::{Deserialize, Serialize};
 
@@ -313,6 +313,7 @@ impl SegmentParams {
             sizing: SizingParams {
                 adaptive: true,
                 coarse_start: true,
+                finish: (phases == 2).then_some(Finish::TWO_PHASE),
                 ..SizingParams::default()
             },
             ..Self::new(phases)

@@ -127,6 +127,51 @@ fn coarse_to_fine_3d_keeps_the_dice_with_fewer_tets() {
     );
 }
 
+/// The fine finish of the 3D two-phase default: once the stopping rule is
+/// met, the run goes on for the finish's iterations without flips, on
+/// smaller interface facets (resizing splits the interface edges longer
+/// than twice `L/2`: two thirds of the mean facet area here), on a valid
+/// mesh and at least as accurate.
+#[test]
+fn the_3d_fine_finish_refines_the_interfaces_after_the_stopping_rule() {
+    let ph = shapes3d::torus(32, 0.1, 2);
+    let view = ImageView::new_3d([ph.nx, ph.ny, ph.nz], &ph.image).unwrap();
+    let finished = SegmentParams::new_3d(2);
+    let finish = finished
+        .sizing
+        .finish
+        .expect("the 3D two-phase default finishes");
+    let mut plain = finished.clone();
+    plain.sizing.finish = None;
+    let run = |params: SegmentParams| {
+        let mut seg = Segmentation::<D3>::new(view, params).unwrap();
+        let report = seg.run(|_| {});
+        assert_valid(seg.complex());
+        assert!(report.converged);
+        let facets: Vec<f64> = seg
+            .complex()
+            .interface_facets()
+            .map(|f| f.measure)
+            .collect();
+        let mean_facet = facets.iter().sum::<f64>() / facets.len() as f64;
+        let dice = mean_dice(&seg.label_image(), &ph.truth, 2);
+        (report, mean_facet, dice)
+    };
+    let (plain, plain_facet, plain_dice) = run(plain);
+    let (finished, finished_facet, finished_dice) = run(finished);
+    assert_eq!(finished.iterations, plain.iterations + finish.iterations);
+    let last = &finished.history[plain.iterations..];
+    assert!(last.iter().all(|r| r.flips == 0), "{last:?}");
+    assert!(
+        finished_facet < 0.75 * plain_facet,
+        "mean interface facet {finished_facet} finished, {plain_facet} without"
+    );
+    assert!(
+        finished_dice > plain_dice - 0.002,
+        "Dice {finished_dice} finished, {plain_dice} without"
+    );
+}
+
 /// A refined start (`start_refinements`) on the brain-like phantom: before
 /// the first iteration the coarse mesh is refined at the labels'
 /// interfaces and the refined cells relabelled, so the starting labels are

@@ -1,11 +1,9 @@
 //! The labels do not depend on how the intensities are encoded: the
 //! phantoms as 8-bit PNG, 16-bit PNG with 64 levels, 16-bit PNG offset by
 //! 20000, float32 TIFF in shifted units and negated float32 TIFF give the same
-//! segmentation (mean Dice ≥ 0.99 between runs), in 2D and in 3D, but for
-//! the lossy 64 levels in 3D with the default interface size, which must be
-//! as accurate (and the same on the uniform mesh or with interfaces 1.5
-//! voxels fine); a 16-bit volume's report gives its phase means in the
-//! file's units.
+//! segmentation (mean Dice ≥ 0.99 between runs), in 2D and in 3D at the
+//! default settings (and on the uniform 3D mesh); a 16-bit volume's report
+//! gives its phase means in the file's units.
 
 use dsc_seg::io::{Image2, SampleType};
 use dsc_seg::phantom::{shapes3d, Phantom2Kind};
@@ -172,21 +170,11 @@ fn encodings_of_a_3d_phantom_give_the_same_labels() {
         }
         let dice = mean_dice(&labels, &base, 2);
         let truth = mean_dice(&labels, &ph.truth, 2);
-        // 64 levels change the data (by up to half a level in 64): with the
-        // default adaptive mesh from a coarse start the first flip round of
-        // the coarse cells can differ by a cell, and the mesh, refined from
-        // there, fits the noise with vertices elsewhere (about a tenth of a
-        // voxel: Dice 0.988 between the runs, as for ±0.1 grey levels of
-        // noise added to the 8-bit data); it must be as accurate, and the
-        // uniform mesh must give the same labels (below). The exact
-        // re-encodings must give the same labels.
-        let lossy = what.contains("64 levels");
-        let ok = if lossy {
-            truth >= base_truth - 0.005
-        } else {
-            dice >= 0.99
-        };
-        if !ok {
+        // 64 levels change the data (by up to half a level in 64): the runs
+        // may part at a flip of a coarse cell and end on different meshes,
+        // which the fine finish brings within Dice 0.9924 of each other
+        // (0.9905 without it). The exact re-encodings give the same labels.
+        if dice < 0.99 {
             failures.push(format!(
                 "{what}: Dice {dice} with the 8-bit labels, {truth} with the truth ({base_truth} 8-bit)"
             ));
@@ -216,17 +204,6 @@ fn assert_64_levels_agree_with_8_bit(params: SegmentParams) {
 #[test]
 fn a_3d_phantom_with_64_levels_gives_the_same_labels_on_the_uniform_mesh() {
     assert_64_levels_agree_with_8_bit(uniform_3d());
-}
-
-/// With the 3D default at interfaces 1.5 voxels fine (`--edge-length 1.5`)
-/// the 64-level re-encoding gives the 8-bit run's labels too: two runs that
-/// part converge to optima closer together the finer the interface cells
-/// (Dice 0.996 here, 0.988 at the default 3).
-#[test]
-fn a_3d_phantom_with_64_levels_gives_the_same_labels_with_fine_interfaces() {
-    let mut fine = SegmentParams::new_3d(2);
-    fine.edge_length = Some(1.5);
-    assert_64_levels_agree_with_8_bit(fine);
 }
 
 /// A 16-bit volume's report gives its range and phase means in the file's
