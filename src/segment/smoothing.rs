@@ -23,7 +23,7 @@
 //! blobs of 3–5 px) that the smoothing would blur.
 
 use super::image::ImageView;
-use rayon::prelude::*;
+use crate::phantom::blur::gaussian_blur_2d;
 
 /// Force noise `2σ̂/Δ` below which the force samples the input as it is.
 pub const SMOOTHING_FROM_NOISE: f64 = 0.3;
@@ -69,7 +69,7 @@ impl ForceImage {
             return ForceImage::default();
         }
         ForceImage {
-            smoothed: gaussian_blur(image.data, image.dims[0], sigma),
+            smoothed: gaussian_blur_2d(image.data, image.dims[0], image.dims[1], sigma),
             sigma,
         }
     }
@@ -91,59 +91,6 @@ impl ForceImage {
             *image
         }
     }
-}
-
-/// The normalised Gaussian of standard deviation `sigma`, truncated at
-/// `⌈3σ⌉` on each side.
-fn gaussian_kernel(sigma: f64) -> Vec<f64> {
-    let radius = (3.0 * sigma).ceil() as i64;
-    let weights: Vec<f64> = (-radius..=radius)
-        .map(|x| (-0.5 * (x * x) as f64 / (sigma * sigma)).exp())
-        .collect();
-    let total: f64 = weights.iter().sum();
-    weights.iter().map(|w| w / total).collect()
-}
-
-/// A row-major image of rows `width` long blurred by a separable Gaussian
-/// (standard deviation `sigma` pixels; the border pixels repeat). Sums in
-/// `f64`, rows in parallel: the result does not depend on the thread count.
-fn gaussian_blur(data: &[f32], width: usize, sigma: f64) -> Vec<f32> {
-    let kernel = gaussian_kernel(sigma);
-    let radius = (kernel.len() / 2) as i64;
-    let height = data.len() / width;
-    let clamp = |i: i64, n: usize| i.clamp(0, n as i64 - 1) as usize;
-    let mut along_rows = vec![0f32; data.len()];
-    along_rows
-        .par_chunks_mut(width)
-        .zip(data.par_chunks(width))
-        .for_each(|(out, row)| {
-            for (x, o) in out.iter_mut().enumerate() {
-                let sum: f64 = kernel
-                    .iter()
-                    .enumerate()
-                    .map(|(k, w)| w * row[clamp(x as i64 + k as i64 - radius, width)] as f64)
-                    .sum();
-                *o = sum as f32;
-            }
-        });
-    let mut out = vec![0f32; data.len()];
-    out.par_chunks_mut(width).enumerate().for_each_init(
-        || vec![0f64; width],
-        |sum, (y, out)| {
-            sum.iter_mut().for_each(|s| *s = 0.0);
-            for (k, w) in kernel.iter().enumerate() {
-                let source = clamp(y as i64 + k as i64 - radius, height);
-                let row = &along_rows[source * width..(source + 1) * width];
-                for (s, &v) in sum.iter_mut().zip(row) {
-                    *s += w * v as f64;
-                }
-            }
-            for (o, s) in out.iter_mut().zip(sum.iter()) {
-                *o = *s as f32;
-            }
-        },
-    );
-    out
 }
 
 #[cfg(test)]
