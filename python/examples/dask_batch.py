@@ -63,7 +63,7 @@ def segment_file(
             iterations=report["iterations"],
             converged=report["converged"],
             status="done",
-            warnings="; ".join(report["warnings"]),
+            warnings="; ".join(report["segmentation"]["warnings"]),
         )
     except Exception as e:  # a bad input fails its own row
         row.update(status="error", error=f"{type(e).__name__}: {e}")

@@ -47,6 +47,7 @@ def test_dask_example_matches_sequential_runs(tmp_path):
     with open(out / "summary.csv") as f:
         summary = list(csv.DictReader(f))
     assert [r["name"] for r in summary] == sorted(names + ["broken"])
+    assert "warnings" in summary[0], "the column of the command line's batch summary"
     for name in names:
         assert by_name[name]["status"] == "done", by_name[name]
         labels = tifffile.imread(out / name / "labels.tif")
