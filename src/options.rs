@@ -203,15 +203,13 @@ impl SegmentOptions {
         params.auto_phases = auto;
         params.edge_length = self.edge_length;
         self.evolution.apply(&mut params);
-        let init = match implied_start(
+        let init = implied_start(
             self.init,
             (!self.disks.is_empty()).then_some((InitKind::Disks, "--disk", "disks")),
             self.init_labels.is_some(),
             InitKind::Labels,
-        )? {
-            Some(k) => k,
-            None => InitKind::Histogram,
-        };
+        )?
+        .unwrap_or(InitKind::Histogram);
         params.init = match init {
             InitKind::Histogram => Init::Histogram,
             InitKind::Range => Init::Range,
@@ -310,15 +308,13 @@ impl Segment3dOptions {
             params.sizing.finish = None;
         }
         self.evolution.apply(&mut params);
-        let init = match implied_start(
+        let init = implied_start(
             self.init,
             (!self.balls.is_empty()).then_some((Init3Kind::Balls, "--ball", "balls")),
             self.init_labels.is_some(),
             Init3Kind::Labels,
-        )? {
-            Some(k) => k,
-            None => Init3Kind::Histogram,
-        };
+        )?
+        .unwrap_or(Init3Kind::Histogram);
         params.init = match init {
             Init3Kind::Histogram => Init::Histogram,
             Init3Kind::Range => Init::Range,
