@@ -100,9 +100,9 @@ pub struct SizingParams {
 }
 
 /// The fine finish of an adaptive run: once the stopping rule is met, the
-/// cells at interfaces ask for `interface_fraction·L` (at least `h_min`)
-/// and the run goes on for `iterations` more iterations without label
-/// flips, then stops.
+/// cells with a facet on an interface ask for `interface_fraction·L` (at
+/// least `h_min`) and the run goes on for `iterations` more iterations
+/// without label flips, then stops.
 ///
 /// Why: a surface of flat facets about `L` long cuts a curved interface a
 /// fraction of a voxel inside or outside of it depending on where its
@@ -124,7 +124,7 @@ pub struct Finish {
 impl Finish {
     /// The 3D two-phase default: interfaces at `L/2` for 3 iterations. On
     /// the 64³ two-phase phantoms the Dice against the truth changed by
-    /// −0.0004 to +0.0014, at 1.5–2.7× the time (benches/RESULTS.md,
+    /// −0.0004 to +0.0014, at 1.3–2.0× the CPU time (benches/RESULTS.md,
     /// "Encoding stability, 3D").
     /// Not for more phases: on the three- and four-phase phantoms, finer
     /// cells along the blurred edges between phases whose means are not
@@ -318,10 +318,25 @@ impl AdaptiveSizing {
         self.settled = true;
     }
 
-    /// From the next update on, cells at interfaces ask for `size`
-    /// (at least `h_min`) instead of `L` (see [`Finish`]).
+    /// From the next update on, cells with a facet on an interface ask for
+    /// `size` (at least `h_min`) instead of `L` (see [`Finish`]).
     pub fn refine_interfaces(&mut self, size: f64) {
         self.interface = size.max(self.sizes.h_min).min(self.sizes.interface);
+    }
+
+    /// The size cell `c`, which touches an interface, asks for: `L`; in the
+    /// [`Finish`], the finer size if one of its facets lies on the
+    /// interface. The finish refines the surface's facets; a cell touching
+    /// the interface only at a vertex or an edge holds none of them, and
+    /// refining it too (a band of cells around the surface) cost a third
+    /// more tetrahedra for the same surface.
+    fn interface_size<K: Dim>(&self, complex: &Complex<K>, c: CellId) -> f64 {
+        let holds_surface = || (0..K::NV).any(|i| complex.is_interface_facet(c, i));
+        if self.interface < self.sizes.interface && holds_surface() {
+            self.interface
+        } else {
+            self.sizes.interface
+        }
     }
 
     /// The field for the next deform of `complex`, whose cells have the
@@ -350,7 +365,7 @@ impl AdaptiveSizing {
                 .iter()
                 .any(|&v| complex.class(v).on_interface());
             if on_interface {
-                field.lower(&centroid, self.interface);
+                field.lower(&centroid, self.interface_size(complex, c));
             }
             let Some(stats) = cells.get(c.index()) else {
                 continue;

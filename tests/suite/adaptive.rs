@@ -2,11 +2,13 @@
 //! cells than the uniform one at the same accuracy, valid, in 2D and 3D.
 
 use crate::common::assert_valid;
+use dsc_seg::complex::Complex;
 use dsc_seg::dim::{D2, D3};
 use dsc_seg::phantom::{shapes3d, Phantom2Kind};
 use dsc_seg::pipeline::mean_dice;
+use dsc_seg::segment::adaptive::{AdaptiveSizing, SizingParams};
 use dsc_seg::segment::models::RegionForce;
-use dsc_seg::segment::{ImageView, Raster, SegmentParams, SegmentReport, Segmentation};
+use dsc_seg::segment::{ImageView, PhaseStats, Raster, SegmentParams, SegmentReport, Segmentation};
 
 /// A segmentation whose region force samples the image as it is, as on the
 /// adaptive mesh (the uniform 2D mesh samples it smoothed under noise): the
@@ -169,6 +171,52 @@ fn the_3d_fine_finish_refines_the_interfaces_after_the_stopping_rule() {
     assert!(
         finished_dice > plain_dice - 0.002,
         "Dice {finished_dice} finished, {plain_dice} without"
+    );
+}
+
+/// The fine finish refines the surface, not a band around it: cells with a
+/// facet on the interface ask for the finer size, while most cells that
+/// touch it only at a vertex or an edge keep `L` (where the gradation from
+/// the finer cells allows).
+#[test]
+fn the_fine_finish_asks_for_the_finer_size_only_at_the_surface() {
+    let l = 3.0;
+    let mut complex = Complex::<D3>::cuboid([18.0; 3], l).unwrap();
+    let left: Vec<_> = complex
+        .cell_ids()
+        .filter(|&c| complex.cell_points(c).iter().map(|p| p.x).sum::<f64>() < 4.0 * 9.0)
+        .map(|c| (c, 1))
+        .collect();
+    complex.set_labels(&left);
+    let params = SizingParams {
+        adaptive: true,
+        ..SizingParams::default()
+    };
+    let sizes = params.sizes(3, 18.0, 1.0, l);
+    let (lo, hi) = complex.domain();
+    let mut sizing = AdaptiveSizing::new::<D3>(&params, sizes, lo, hi);
+    let finer = 0.5 * l;
+    sizing.refine_interfaces(finer);
+    let field = sizing.update(&complex, &[], &PhaseStats::new(2)).clone();
+    let (mut touching, mut kept) = (0, 0);
+    for c in complex.cell_ids() {
+        let pts = complex.cell_points(c);
+        let centroid = (pts[0] + pts[1] + pts[2] + pts[3]) * 0.25;
+        let h = field.at(&centroid, sizes.h_max);
+        if (0..4).any(|i| complex.is_interface_facet(c, i)) {
+            assert!(h <= finer, "a surface cell asks for {h}");
+        } else if complex
+            .cell(c)
+            .iter()
+            .any(|&v| complex.class(v).on_interface())
+        {
+            touching += 1;
+            kept += usize::from(h > finer);
+        }
+    }
+    assert!(
+        touching > 0 && 2 * kept > touching,
+        "{kept} of {touching} cells touching the surface at a vertex or an edge kept a coarser size"
     );
 }
 
