@@ -99,6 +99,8 @@ impl<K: Dim> Complex<K> {
             }
         };
         let (free_u, free_v) = (free(u), free(v));
+        // Every candidate judges the same cells before the collapse.
+        let (quality_u, quality_v) = (self.qualities(star_u), self.qualities(star_v));
         // At most three positions times two choices of the kept end.
         let mut candidates: SmallVec<[(f64, Candidate<K::Point>); 6]> = SmallVec::new();
         for at in [pu, pv, (pu + pv) * 0.5] {
@@ -109,11 +111,25 @@ impl<K: Dim> Complex<K> {
             if (at != pu && !free_u) || (at != pv && !free_v) {
                 continue;
             }
-            for (keep, remove, star_keep, star_remove) in
-                [(u, v, &*star_u, &*star_v), (v, u, &*star_v, &*star_u)]
-            {
-                let q =
-                    self.collapse_quality(keep, remove, at, star_keep, star_remove, min_quality);
+            for (keep, remove, around_keep, around_remove) in [
+                (
+                    u,
+                    v,
+                    (&star_u[..], &quality_u[..]),
+                    (&star_v[..], &quality_v[..]),
+                ),
+                (
+                    v,
+                    u,
+                    (&star_v[..], &quality_v[..]),
+                    (&star_u[..], &quality_u[..]),
+                ),
+            ] {
+                let q = self.collapse_quality(
+                    (keep, remove, at),
+                    [around_keep, around_remove],
+                    min_quality,
+                );
                 if q >= min_quality && q > 0.0 {
                     candidates.push((q, Candidate { keep, remove, at }));
                 }
@@ -137,37 +153,65 @@ impl<K: Dim> Complex<K> {
     /// (0 if any would invert). Cells that are already below `min_quality` before
     /// the collapse are not counted (they may stay degenerate, not invert): otherwise
     /// a chain of flat cells, e.g. a squeezed sliver between two merging fronts,
-    /// blocks every collapse that would remove it.
+    /// blocks every collapse that would remove it. `stars` holds the stars of
+    /// `keep` and `remove`, each with its cells' qualities before the collapse
+    /// ([`qualities`](Self::qualities)): a cell whose corners all stay where
+    /// they are keeps its quality (and its positive orientation), so only the
+    /// cells that change are evaluated. Once a cell falls below `min_quality`
+    /// the candidate fails whatever the others give: the worst so far, below
+    /// `min_quality`, is returned without judging the rest.
     fn collapse_quality(
         &self,
-        keep: VertexId,
-        remove: VertexId,
-        at: K::Point,
-        star_keep: &[CellId],
-        star_remove: &[CellId],
+        (keep, remove, at): (VertexId, VertexId, K::Point),
+        stars: [(&[CellId], &[f64]); 2],
         min_quality: f64,
     ) -> f64 {
+        let stays = |w: VertexId| self.position(w) == at;
+        let (keep_stays, remove_stays) = (stays(keep), stays(remove));
         let mut worst: f64 = 1.0;
-        for &c in star_keep.iter().chain(star_remove) {
-            let cell = self.cell(c);
-            if cell.contains(&keep) && cell.contains(&remove) {
-                continue;
-            }
-            let mut pts = self.cell_points(c);
-            let already_degenerate = K::quality(&pts[..K::NV]) < min_quality;
-            for (i, &w) in cell.iter().enumerate() {
-                if w == keep || w == remove {
-                    pts[i] = at;
+        for (star, before) in stars {
+            for (&c, &before) in star.iter().zip(before) {
+                let cell = self.cell(c);
+                let (has_keep, has_remove) = (cell.contains(&keep), cell.contains(&remove));
+                if has_keep && has_remove {
+                    continue;
                 }
-            }
-            if K::orient(&pts[..K::NV]) <= 0.0 {
-                return 0.0;
-            }
-            if !already_degenerate {
-                worst = worst.min(K::quality(&pts[..K::NV]));
+                let already_degenerate = before < min_quality;
+                let q = if (!has_keep || keep_stays) && (!has_remove || remove_stays) {
+                    before
+                } else {
+                    let mut pts = self.cell_points(c);
+                    for (i, &w) in cell.iter().enumerate() {
+                        if w == keep || w == remove {
+                            pts[i] = at;
+                        }
+                    }
+                    if K::orient(&pts[..K::NV]) <= 0.0 {
+                        return 0.0;
+                    }
+                    if already_degenerate {
+                        continue;
+                    }
+                    K::quality(&pts[..K::NV])
+                };
+                if already_degenerate {
+                    continue;
+                }
+                worst = worst.min(q);
+                if worst < min_quality {
+                    return worst;
+                }
             }
         }
         worst
+    }
+
+    /// The quality of each cell of `cells`, in order.
+    fn qualities(&self, cells: &[CellId]) -> SmallVec<[f64; 64]> {
+        cells
+            .iter()
+            .map(|&c| K::quality(&self.cell_points(c)[..K::NV]))
+            .collect()
     }
 
     /// Replaces the cells around `cand.remove` by the kept vertex's; `star` is scratch.
