@@ -4,11 +4,16 @@
 //! compaction, and spare lists that operations borrow instead of allocating.
 
 use super::{CellId, VertexId};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The complex's clocks, counters, compaction maps and spare lists; private
 /// to the complex, read through its methods.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub(super) struct Bookkeeping {
+    /// Distinct for every complex built or cloned in the process, so that a
+    /// record kept across calls (stamped with this complex's clocks) is
+    /// never read against another complex whose clocks happen to agree.
+    pub(super) identity: u64,
     /// How many times [`Complex::compact`](super::Complex::compact) renumbered the complex.
     pub(super) compactions: u64,
     /// The old-to-new cell map of the last compaction.
@@ -35,9 +40,34 @@ impl Bookkeeping {
     /// at zero, no compaction yet.
     pub(super) fn new(vertices: usize) -> Self {
         Self {
+            identity: fresh_identity(),
             moved_at: vec![0; vertices],
             star_changed_at: vec![0; vertices],
             ..Self::default()
         }
     }
+}
+
+/// A clone is another complex from then on: its own identity, the same
+/// records.
+impl Clone for Bookkeeping {
+    fn clone(&self) -> Self {
+        Self {
+            identity: fresh_identity(),
+            compactions: self.compactions,
+            last_cell_map: self.last_cell_map.clone(),
+            last_vertex_map: self.last_vertex_map.clone(),
+            moved_at: self.moved_at.clone(),
+            star_changed_at: self.star_changed_at.clone(),
+            move_clock: self.move_clock,
+            spare_lists: self.spare_lists.clone(),
+            relabels: self.relabels,
+        }
+    }
+}
+
+/// A number no complex of this process had before.
+fn fresh_identity() -> u64 {
+    static NEXT: AtomicU64 = AtomicU64::new(1);
+    NEXT.fetch_add(1, Ordering::Relaxed)
 }

@@ -524,6 +524,13 @@ impl<K: Dim> Complex<K> {
         &self.book.last_vertex_map
     }
 
+    /// A number distinct for every complex built or cloned in the process:
+    /// records about one complex kept across calls check it before
+    /// trusting its clocks.
+    pub(crate) fn identity(&self) -> u64 {
+        self.book.identity
+    }
+
     /// How many times [`Complex::compact`] has renumbered this complex (lets
     /// per-cell caches follow the renumbering, see [`Complex::last_cell_map`]).
     pub fn compactions(&self) -> u64 {

@@ -129,7 +129,13 @@ impl<K: Connectivity> Complex<K> {
             );
         }
         report.stopped_short = requested - report.arrived - report.snapped;
-        report.resize = self.resize_with(params, &ws.sizing, &mut touched, &mut ws.edges);
+        report.resize = self.resize_with(
+            params,
+            &ws.sizing,
+            &mut touched,
+            &mut ws.edges,
+            &mut ws.refusals,
+        );
         touched.retain(|&v| self.is_vertex_alive(v));
         add(
             &mut report.improve,
@@ -137,6 +143,7 @@ impl<K: Connectivity> Complex<K> {
         );
         self.give_back(star);
         self.compact_in_place();
+        ws.refusals.follow_compaction(self);
         (ws.pending, ws.movers, ws.touched) = (pending, movers, touched);
         report
     }

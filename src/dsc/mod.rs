@@ -7,6 +7,7 @@
 mod deform;
 mod improve;
 mod params;
+mod refusals;
 mod resize;
 mod sizing;
 mod workspace;

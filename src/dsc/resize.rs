@@ -1,5 +1,6 @@
 //! Resizing after a deform: keep interface edges and cells near the target size.
 
+use super::refusals::RefusedCollapses;
 use super::{DscParams, SizingField};
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::Point;
@@ -48,16 +49,25 @@ impl<K: Connectivity> Complex<K> {
         sizing: &SizingField,
         touched: &mut Vec<VertexId>,
     ) -> ResizeStats {
-        self.resize_with(params, sizing, touched, &mut Vec::new())
+        self.resize_with(
+            params,
+            sizing,
+            touched,
+            &mut Vec::new(),
+            &mut RefusedCollapses::default(),
+        )
     }
 
-    /// [`resize_sized`](Self::resize_sized) listing the interface edges into `edges` (scratch).
+    /// [`resize_sized`](Self::resize_sized) listing the interface edges into
+    /// `edges` (scratch), skipping the coarsening collapses `refusals` knows
+    /// would be refused again (and recording the new refusals).
     pub(super) fn resize_with(
         &mut self,
         params: &DscParams,
         sizing: &SizingField,
         touched: &mut Vec<VertexId>,
         edges: &mut Vec<(VertexId, VertexId)>,
+        refusals: &mut RefusedCollapses,
     ) -> ResizeStats {
         let mut stats = ResizeStats::default();
         let straight_cos = params.straight_angle_deg.to_radians().cos();
@@ -102,7 +112,7 @@ impl<K: Connectivity> Complex<K> {
             }
         }
         if !sizing.is_uniform() {
-            stats.interior_collapses = self.coarsen_interior(params, sizing, touched);
+            stats.interior_collapses = self.coarsen_interior(params, sizing, touched, refusals);
         }
         stats
     }
@@ -157,14 +167,17 @@ impl<K: Connectivity> Complex<K> {
 
     /// Collapses, safely, the shortest edge of each cell without an
     /// interface vertex whose length is below `coarsen_length·h`; returns
-    /// how many collapsed.
+    /// how many collapsed. A collapse `refusals` knows would be refused is
+    /// not tried again.
     fn coarsen_interior(
         &mut self,
         params: &DscParams,
         sizing: &SizingField,
         touched: &mut Vec<VertexId>,
+        refusals: &mut RefusedCollapses,
     ) -> usize {
         let straight_cos = params.straight_angle_deg.to_radians().cos();
+        refusals.sync(self, params.min_quality, straight_cos);
         let mut collapses = 0;
         let end = self.cell_capacity();
         for c in 0..end {
@@ -173,15 +186,20 @@ impl<K: Connectivity> Complex<K> {
                 continue;
             }
             let (u, v) = self.shortest_edge(c);
+            if refusals.still_refused(self, c, (u, v)) {
+                continue;
+            }
             let Some((len, h)) = self.edge_against_size(u, v, params, sizing) else {
                 continue;
             };
             if len < params.coarsen_length * h {
-                if let Ok(k) =
-                    self.collapse_edge(u, v, CollapseMode::Safe, params.min_quality, straight_cos)
+                match self.collapse_edge(u, v, CollapseMode::Safe, params.min_quality, straight_cos)
                 {
-                    touched.push(k);
-                    collapses += 1;
+                    Ok(k) => {
+                        touched.push(k);
+                        collapses += 1;
+                    }
+                    Err(_) => refusals.record(self, c),
                 }
             }
         }

@@ -6,6 +6,7 @@
 //! iteration's deform allocates nothing of its own (the local mesh
 //! operations' few small buffers aside).
 
+use super::refusals::RefusedCollapses;
 use super::SizingField;
 use crate::complex::{CellId, VertexId};
 use crate::dim::Dim;
@@ -14,9 +15,12 @@ use crate::ops::{ImproveMemo, SmoothScratch};
 /// What [`Complex::deform_with`](crate::complex::Complex::deform_with) (and,
 /// inside the crate, the improvement it runs) keeps between calls: the
 /// improvement memo ([`ImproveMemo`]) and scratch buffers, whose contents
-/// never outlive a call. `deform_with` starts by forgetting the memo, so any
-/// complex may use the workspace there; improvement calls in a row must be
-/// about one complex (the memo's verdicts are about its cells and vertices).
+/// never outlive a call, and the coarsening collapses the mesh refused,
+/// which do (they hold while the stars involved are unchanged, and are
+/// forgotten when another complex, or a compaction they did not follow,
+/// comes). `deform_with` starts by forgetting the memo, so any complex may
+/// use the workspace there; improvement calls in a row must be about one
+/// complex (the memo's verdicts are about its cells and vertices).
 #[derive(Debug)]
 pub struct DscWorkspace<K: Dim> {
     pub(super) memo: ImproveMemo,
@@ -38,6 +42,9 @@ pub struct DscWorkspace<K: Dim> {
     /// The target edge length over the domain, read by resizing and the
     /// degenerate-cell thresholds (uniform unless set).
     pub(super) sizing: SizingField,
+    /// The coarsening collapses the mesh refused, kept across calls (they
+    /// follow the compactions; see [`RefusedCollapses`]).
+    pub(super) refusals: RefusedCollapses,
 }
 
 impl<K: Dim> DscWorkspace<K> {
@@ -56,6 +63,7 @@ impl<K: Dim> DscWorkspace<K> {
             walk: WalkScratch::default(),
             smooth: SmoothScratch::default(),
             sizing: SizingField::uniform(),
+            refusals: RefusedCollapses::default(),
         }
     }
 }

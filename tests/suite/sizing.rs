@@ -165,3 +165,64 @@ fn a_graded_field_grades_the_3d_mesh() {
         "mean tet volume left {left}, right {right}"
     );
 }
+
+/// A workspace kept across graded deforms (which remembers the coarsening
+/// collapses the mesh refused, across compactions) gives, bit for bit, the
+/// meshes of a fresh workspace per deform, which tries every collapse; a
+/// clone deformed in between with the same workspace does not confuse it.
+fn kept_workspace_coarsens_like_fresh_ones<K: Connectivity>(
+    c: Complex<K>,
+    seed: u64,
+    calls: usize,
+) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (field, _) = random_field(&c, &mut rng);
+    let params = DscParams::new::<K>(L);
+    let (mut fresh, mut kept) = (c.clone(), c);
+    let mut ws = DscWorkspace::new();
+    ws.set_sizing(field.clone());
+    let mut interior_collapses = 0;
+    for call in 0..calls {
+        let omega: Vec<f64> = (0..K::N).map(|_| rng.random_range(-0.3..0.3)).collect();
+        let amp: Vec<f64> = (0..K::N).map(|_| rng.random_range(-0.6..0.6)).collect();
+        let (omega, amp) = (point::<K>(&omega), point::<K>(&amp) * L);
+        let d = interface_field(&kept, |_, p| amp * omega.dot(&p).sin());
+        if call % 3 == 2 {
+            // Another complex through the same workspace.
+            kept.clone().deform_with(&d, &params, &mut ws);
+        }
+        let mut once = DscWorkspace::new();
+        once.set_sizing(field.clone());
+        let a = fresh.deform_with(&d, &params, &mut once);
+        let b = kept.deform_with(&d, &params, &mut ws);
+        assert_eq!(a.resize, b.resize, "seed {seed} call {call}");
+        let (ma, mb) = (fresh.to_arrays(), kept.to_arrays());
+        assert!(
+            ma.connectivity == mb.connectivity,
+            "seed {seed} call {call}: cells"
+        );
+        assert!(ma.points == mb.points, "seed {seed} call {call}: positions");
+        interior_collapses += b.resize.interior_collapses;
+    }
+    assert!(interior_collapses > 0, "seed {seed}: nothing coarsened");
+}
+
+#[test]
+fn kept_workspace_coarsens_like_fresh_ones_2d() {
+    for seed in 0..4 {
+        let c = disks(48.0, L, &[(24.0, 24.0, 10.0), (10.0, 36.0, 5.0)]);
+        kept_workspace_coarsens_like_fresh_ones::<D2>(c, seed, 10);
+    }
+}
+
+#[test]
+fn kept_workspace_coarsens_like_fresh_ones_3d() {
+    for seed in 0..3 {
+        let c = balls(
+            [28.0, 24.0, 24.0],
+            L,
+            &[(Vector3::new(12.0, 12.0, 12.0), 6.5)],
+        );
+        kept_workspace_coarsens_like_fresh_ones::<D3>(c, seed, 6);
+    }
+}
