@@ -80,6 +80,14 @@ impl<K: Dim> DscWorkspace<K> {
         self.sizing = sizing;
         self.memo.forget();
     }
+
+    /// [`set_sizing`](Self::set_sizing) to a copy of `sizing`, made in the
+    /// buffer of the field it replaces (a caller that sets a field of the
+    /// same grid every iteration allocates none).
+    pub fn copy_sizing(&mut self, sizing: &SizingField) {
+        self.sizing.clone_from(sizing);
+        self.memo.forget();
+    }
 }
 
 impl<K: Dim> Default for DscWorkspace<K> {

@@ -265,6 +265,10 @@ pub struct AdaptiveSizing {
     /// The field of the last update before its gradation was limited: when
     /// an update lowers the same samples, the limited field is the last one.
     unlimited: SizingField,
+    /// Buffers kept so that an update copies no grid into a new allocation:
+    /// the field being built, and the padded grid of the gradation sweeps.
+    building: SizingField,
+    sweeps: Vec<f64>,
     /// Cells that asked for refinement in the last update.
     pub last_requests: usize,
     /// Cells away from the interfaces that asked for a finer size than any
@@ -293,6 +297,8 @@ impl AdaptiveSizing {
             residual_sigmas: params.residual_sigmas,
             field: requests.clone(),
             unlimited: SizingField::uniform(),
+            building: requests.clone(),
+            sweeps: Vec::new(),
             requests,
             last_requests: 0,
             new_requests: 0,
@@ -354,7 +360,7 @@ impl AdaptiveSizing {
         // In samples, as the residuals count them.
         let step = self.sizes.sample_step;
         let smallest_cell = K::regular_measure(self.sizes.h_min / step).max(1.0);
-        let mut field = self.field.clone();
+        let mut field = std::mem::take(&mut self.building);
         field.fill(self.sizes.h_max);
         for c in complex.cell_ids() {
             let pts = complex.cell_points(c);
@@ -404,10 +410,15 @@ impl AdaptiveSizing {
         }
         field.lower_to(&self.requests);
         if field != self.unlimited {
-            self.unlimited = field.clone();
-            field.limit_gradation(self.gradation);
-            self.field = field;
+            // The new unlimited field is kept; the old one's buffer takes
+            // its copy, limited, and the old limited field's buffer is the
+            // next update's to build in.
+            std::mem::swap(&mut self.unlimited, &mut field);
+            field.clone_from(&self.unlimited);
+            field.limit_gradation_with(self.gradation, &mut self.sweeps);
+            std::mem::swap(&mut self.field, &mut field);
         }
+        self.building = field;
         &self.field
     }
 

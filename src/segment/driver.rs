@@ -1050,7 +1050,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 adaptive.settle();
             }
             let field = adaptive.update(&self.complex, &self.cells, &self.phases);
-            self.deform_workspace.set_sizing(field.clone());
+            self.deform_workspace.copy_sizing(field);
         }
     }
 
