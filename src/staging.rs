@@ -90,9 +90,27 @@ impl Drop for Staging {
 pub fn remove_all_and_hold() -> MutexGuard<'static, Vec<PathBuf>> {
     let mut list = live();
     for dir in list.drain(..) {
-        let _ = std::fs::remove_dir_all(dir);
+        remove_while_written(&dir);
     }
     list
+}
+
+/// Removes `dir` although another thread may still be writing an output into
+/// it: a file created between `remove_dir_all`'s listing and its final
+/// `rmdir` makes that fail with the directory left behind, so it is tried
+/// again until the directory is gone. Once it is, no writer can create a file
+/// in it (the path no longer exists), so a few tries suffice; the bound only
+/// keeps a directory that cannot be removed (permissions) from holding the
+/// exit forever.
+fn remove_while_written(dir: &Path) {
+    for _ in 0..100 {
+        match std::fs::remove_dir_all(dir) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound && dir.exists() => {
+                std::thread::sleep(std::time::Duration::from_millis(5))
+            }
+            _ => return,
+        }
+    }
 }
 
 /// Runs `f` while no interruption can remove staging directories or exit
@@ -100,4 +118,47 @@ pub fn remove_all_and_hold() -> MutexGuard<'static, Vec<PathBuf>> {
 pub fn uninterrupted<T>(f: impl FnOnce() -> T) -> T {
     let _list = live();
     f()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    /// A writer creating files as fast as it can while the directory is
+    /// removed (as the main thread writing outputs while Ctrl-C is handled):
+    /// the directory must be gone afterwards, whatever the interleaving.
+    #[test]
+    fn a_directory_being_written_is_removed() {
+        let parent = tempfile::tempdir().unwrap();
+        for round in 0..10 {
+            let dir = parent.path().join(format!("stage{round}"));
+            std::fs::create_dir(&dir).unwrap();
+            let (started, stop) = (
+                Arc::new(AtomicBool::new(false)),
+                Arc::new(AtomicBool::new(false)),
+            );
+            let writer = {
+                let (dir, started, stop) = (dir.clone(), started.clone(), stop.clone());
+                std::thread::spawn(move || {
+                    for i in 0.. {
+                        let written = std::fs::write(dir.join(format!("out{i}")), [0u8; 64]);
+                        if written.is_err() || stop.load(Ordering::Acquire) {
+                            return;
+                        }
+                        started.store(true, Ordering::Release);
+                    }
+                })
+            };
+            while !started.load(Ordering::Acquire) {
+                std::thread::yield_now();
+            }
+            remove_while_written(&dir);
+            // A directory left behind would keep the writer going for ever.
+            stop.store(true, Ordering::Release);
+            writer.join().unwrap();
+            assert!(!dir.exists(), "round {round}: the directory survived");
+        }
+    }
 }
