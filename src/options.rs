@@ -32,7 +32,8 @@ pub struct EvolutionArgs {
     /// Elasticity weight α of eq. (2) (off by default, as in the paper).
     #[arg(long, allow_hyphen_values = true)]
     pub elasticity: Option<f64>,
-    /// Largest displacement per iteration as a fraction of L.
+    /// Largest displacement per iteration as a fraction of L [default: 0.2;
+    /// 0.3 in 3D with three or more phases].
     #[arg(long, allow_hyphen_values = true)]
     pub step_fraction: Option<f64>,
     /// Vertices asked to move less than this fraction of L in an iteration

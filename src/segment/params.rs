@@ -25,6 +25,16 @@ pub const CONVERGE_PIXELS: f64 = 0.05;
 /// (91 against 73) (`benches/RESULTS.md`, "Speed, 3D").
 pub const MIN_MOVE_3D: f64 = 0.02;
 
+/// The 3D default of [`SegmentParams::step_fraction`] with three or more
+/// phases. On the 64³ and 128³ benchmark volumes of three and four phases
+/// (noise seeds 1 and 2) the Dice rose on 11 of 12 (by up to 0.0068; the
+/// twelfth fell by 0.0007) at 0.96–1.32× the CPU time; on two phases 0.3
+/// moved the Dice by ±0.0004 and some runs took more iterations, so they
+/// keep 0.2 (`benches/RESULTS.md`, "Speed, 3D"). The explicit step
+/// `0.3·L·0.7` stays below the stability limit 2 across a blurred edge up
+/// to L = 9.5 voxels.
+pub const STEP_FRACTION_3D_MULTIPHASE: f64 = 0.3;
+
 /// The 2D sizing field freezes once the energy has not reached a new low
 /// for this many iterations (half the plateau: the last iterations polish
 /// the interfaces on a fixed mesh size).
@@ -184,7 +194,8 @@ pub struct SegmentParams {
     /// Largest displacement per iteration as a fraction of L (when the
     /// largest force reaches 1, i.e. a pixel exactly at a mean). Default 0.2,
     /// below the explicit step's stability limit across a blurred edge for
-    /// every default L. The driver halves the step (down to 1/16) whenever
+    /// every default L; in 3D with three or more phases 0.3
+    /// ([`STEP_FRACTION_3D_MULTIPHASE`]). The driver halves the step (down to 1/16) whenever
     /// the energy has not reached a new low for 10 iterations, so that noisy
     /// runs settle. Evidence: `docs/parameters.md`.
     pub step_fraction: f64,
@@ -296,7 +307,9 @@ impl SegmentParams {
     /// iteration a few cells flip every iteration and the stopping rule never
     /// fires) and `flip_once` on (under strong noise each flip round
     /// relabelled interface voxels that the rigidity then smoothed back),
-    /// `min_move` 0.02 (vertices asked to move less than 0.02·L stay), the energy plateau rule `converge_plateau` 10 (the σ = 0.2 phantoms
+    /// `min_move` 0.02 (vertices asked to move less than 0.02·L stay),
+    /// `step_fraction` 0.3 with three or more phases
+    /// ([`STEP_FRACTION_3D_MULTIPHASE`]), the energy plateau rule `converge_plateau` 10 (the σ = 0.2 phantoms
     /// reach their Dice within 10–30 iterations, then spent 50–250 more
     /// fitting noise), and adaptive resolution from a coarse start (`L` at
     /// the interfaces, cells up to the smallest side / 10 elsewhere: 2.5–12×
@@ -308,6 +321,11 @@ impl SegmentParams {
             flip_interval: 20,
             flip_once: true,
             min_move: MIN_MOVE_3D,
+            step_fraction: if phases == 2 {
+                0.2
+            } else {
+                STEP_FRACTION_3D_MULTIPHASE
+            },
             converge_pixels: None,
             converge_plateau: Some(PLATEAU_ITERATIONS),
             sizing: SizingParams {
