@@ -3,7 +3,7 @@
 use super::refusals::RefusedCollapses;
 use super::{DscParams, SizingField};
 use crate::complex::{CellId, Complex, VertexId};
-use crate::dim::Point;
+use crate::dim::{Dim, Point};
 use crate::ops::CollapseMode;
 use serde::Serialize;
 
@@ -104,9 +104,17 @@ impl<K: Connectivity> Complex<K> {
         } else {
             REFINE_PASSES
         };
+        let mut judged = None;
         for pass in 0..passes {
             let splits = stats.cell_splits;
-            self.resize_cells(params, sizing, pass == 0, touched, &mut stats);
+            judged = Some(self.resize_cells(
+                params,
+                sizing,
+                pass == 0,
+                judged.as_ref(),
+                touched,
+                &mut stats,
+            ));
             if stats.cell_splits == splits {
                 break;
             }
@@ -119,25 +127,40 @@ impl<K: Connectivity> Complex<K> {
 
     /// One pass over the cells: those larger than `max_measure·A(h)` are
     /// split at their longest edge; with `collapse_small`, those smaller
-    /// than `min_measure·A(h)` are collapsed at their shortest edge.
+    /// than `min_measure·A(h)` are collapsed at their shortest edge. After
+    /// a pass (`before`), a later pass, which only splits, passes over the
+    /// cells that one left in place unchanged (they are not large: their
+    /// measure and `h` at their centroid are those it judged) but for those
+    /// whose split failed. Returns what this pass judged.
     fn resize_cells(
         &mut self,
         params: &DscParams,
         sizing: &SizingField,
         collapse_small: bool,
+        before: Option<&JudgedPass>,
         touched: &mut Vec<VertexId>,
         stats: &mut ResizeStats,
-    ) {
+    ) -> JudgedPass {
         let straight_cos = params.straight_angle_deg.to_radians().cos();
         let uniform_bounds = (
             params.measure::<K>(params.max_measure),
             params.measure::<K>(params.min_measure),
         );
         let end = self.cell_capacity();
+        let mut judged = JudgedPass {
+            clock: self.move_clock(),
+            end,
+            failed_splits: Vec::new(),
+        };
         for c in 0..end {
             let c = CellId(c as u32);
             if !self.is_alive(c) {
                 continue;
+            }
+            if let Some(before) = before {
+                if before.left_alone(self, c) {
+                    continue;
+                }
             }
             let m = self.measure(c);
             let (max_measure, min_measure) = if sizing.is_uniform() {
@@ -149,9 +172,12 @@ impl<K: Connectivity> Complex<K> {
             };
             if m > max_measure {
                 let (u, v) = self.longest_edge(c);
-                if let Ok(m) = self.split_edge(u, v) {
-                    touched.push(m);
-                    stats.cell_splits += 1;
+                match self.split_edge(u, v) {
+                    Ok(m) => {
+                        touched.push(m);
+                        stats.cell_splits += 1;
+                    }
+                    Err(_) => judged.failed_splits.push(c),
                 }
             } else if collapse_small && m < min_measure {
                 let (u, v) = self.shortest_edge(c);
@@ -163,6 +189,7 @@ impl<K: Connectivity> Complex<K> {
                 }
             }
         }
+        judged
     }
 
     /// Collapses, safely, the shortest edge of each cell without an
@@ -253,5 +280,26 @@ impl<K: Connectivity> Complex<K> {
         }
         let (a, b) = (self.position(u), self.position(v));
         Some(((a - b).length(), sizing.at_edge(a, b, params.edge_length)))
+    }
+}
+
+/// What one pass of [`resize_cells`](Complex::resize_cells) judged: the
+/// cells below `end`, at move clock `clock`, and the cells whose split failed.
+struct JudgedPass {
+    clock: u64,
+    end: usize,
+    failed_splits: Vec<CellId>,
+}
+
+impl JudgedPass {
+    /// Whether the pass judged `c` and left it in place without trying a
+    /// split that failed, and no corner of it has moved since.
+    fn left_alone<K: Dim>(&self, complex: &Complex<K>, c: CellId) -> bool {
+        c.index() < self.end
+            && complex
+                .cell(c)
+                .iter()
+                .all(|&w| complex.moved_at(w) <= self.clock)
+            && self.failed_splits.binary_search(&c).is_err()
     }
 }
