@@ -281,6 +281,13 @@ pub struct Segment3dOptions {
     /// same labels)
     #[arg(long)]
     pub no_fine_finish: bool,
+    /// Keep layers of an intermediate phase as thin as the band a blurred
+    /// edge leaves between two other phases: by default (three or more
+    /// phases) they go back to the phases on their sides, since under the
+    /// edges' blur (estimated from the data) they cannot be told from that
+    /// band; keep them for real layers that thin
+    #[arg(long)]
+    pub keep_thin_layers: bool,
     /// The evolution's options.
     #[command(flatten)]
     pub evolution: EvolutionArgs,
@@ -307,6 +314,9 @@ impl Segment3dOptions {
         }
         if self.no_fine_finish {
             params.sizing.finish = None;
+        }
+        if self.keep_thin_layers {
+            params.band_flips = false;
         }
         self.evolution.apply(&mut params);
         let init = implied_start(

@@ -22,6 +22,10 @@
 //! - [`flips`]: label flips (mean rule, pixel-dominant rule);
 //! - [`cluster_flips`]: connected groups of small cells that fit another
 //!   phase, relabelled together (adaptive resolution);
+//! - [`band_flips`]: layers of an intermediate phase as thin as a blurred
+//!   edge's band, given back to the phases on their sides (3D), with
+//!   [`phase_distance`] (each cell's depth in its phase towards every other)
+//!   and [`edge_blur`] (the edges' blur estimated along the interfaces);
 //! - [`relaxed_length`]: the length a staircase border of small cells
 //!   relaxes to;
 //! - [`reseed`]: phases that empty or duplicate another, found and re-seeded;
@@ -40,10 +44,12 @@
 
 pub mod adaptive;
 pub mod auto;
+pub mod band_flips;
 pub mod censored;
 pub mod cluster_flips;
 pub mod contrast;
 pub mod driver;
+pub mod edge_blur;
 pub mod error;
 pub mod flips;
 mod force_stage;
@@ -58,6 +64,7 @@ pub mod models;
 mod normal_motion;
 pub mod params;
 pub mod partial_volume;
+pub mod phase_distance;
 pub mod raster;
 pub mod relaxed_length;
 pub mod reseed;

@@ -31,7 +31,7 @@ use super::image::ImageView;
 use super::integrate::{CellStats, PhaseStats};
 use super::intensity::IntensityStats;
 use super::models::paper::{PaperField, PaperTerms};
-use super::models::{CellFlips, ComponentFlips, ParamsInit};
+use super::models::{BandFlips, CellFlips, ComponentFlips, ParamsInit};
 use super::params::SegmentParams;
 use super::raster::Raster;
 use crate::complex::{Complex, Label};
@@ -357,6 +357,18 @@ where
     }
 }
 
+/// The label rules of [`Models::paper`].
+fn paper_rules<K: Raster>(params: &SegmentParams) -> Vec<Box<dyn LabelRule<K>>> {
+    let mut rules: Vec<Box<dyn LabelRule<K>>> = vec![
+        Box::new(CellFlips::default()),
+        Box::new(ComponentFlips::default()),
+    ];
+    if params.band_flips {
+        rules.push(Box::new(BandFlips::default()));
+    }
+    rules
+}
+
 /// The evolution a [`Segmentation`](super::Segmentation) runs: force terms,
 /// label rules and the initialisation.
 pub struct Models<K: Raster> {
@@ -373,7 +385,8 @@ pub struct Models<K: Raster> {
 impl<K: Raster> Models<K> {
     /// The paper's evolution with the weights and settings of `params`:
     /// [`RegionForce`](super::models::RegionForce), [`Rigidity`](super::models::Rigidity), [`Elasticity`](super::models::Elasticity) (sharing one field per
-    /// iteration), [`CellFlips`] then [`ComponentFlips`], initialised by
+    /// iteration), [`CellFlips`] then [`ComponentFlips`] (then [`BandFlips`]
+    /// with [`SegmentParams::band_flips`]), initialised by
     /// [`ParamsInit`] (i.e. [`SegmentParams::init`]). The terms keep their
     /// parameters: change them mid-run through
     /// [`force_mut`](Self::force_mut), not through the `SegmentParams`.
@@ -386,10 +399,7 @@ impl<K: Raster> Models<K> {
         let field = region.field().clone();
         Models {
             forces: vec![Box::new(region), Box::new(rigidity), Box::new(elasticity)],
-            rules: vec![
-                Box::new(CellFlips::default()),
-                Box::new(ComponentFlips::default()),
-            ],
+            rules: paper_rules(params),
             init: Box::new(ParamsInit::default()),
             paper_field: Some(field),
         }

@@ -228,6 +228,14 @@ pub struct SegmentParams {
     /// [`new_3d`](Self::new_3d)).
     #[serde(default)]
     pub converge_plateau: Option<usize>,
+    /// Whether layers of an intermediate phase as thin as the band a blurred
+    /// edge leaves between two other phases are given back to those phases
+    /// at each flip round ([`band_flips`](super::band_flips)). Off in 2D
+    /// (cells are larger than the band there, and a cluster along a blurred
+    /// edge is already left alone); on in 3D with three or more phases
+    /// ([`new_3d`](Self::new_3d)).
+    #[serde(default)]
+    pub band_flips: bool,
     /// Weight `w` of the length (3D: area) term of the Mumford–Shah energy,
     /// a width in pixels (3D: voxels): `ν = w·Δ²/2`, with Δ the smallest gap
     /// between adjacent initial phase means, not below twice the pixels'
@@ -269,6 +277,7 @@ impl SegmentParams {
             reseed: true,
             flip_guard: true,
             flip_once: false,
+            band_flips: false,
             force: ForceModel::Normalised,
             junction_force: JunctionForce::EdgeLocal,
             rigidity: 5.0,
@@ -320,6 +329,7 @@ impl SegmentParams {
             length_weight: if phases == 2 { 0.6 } else { 1.2 },
             flip_interval: 20,
             flip_once: true,
+            band_flips: phases >= 3,
             min_move: MIN_MOVE_3D,
             step_fraction: if phases == 2 {
                 0.2
