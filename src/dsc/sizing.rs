@@ -520,15 +520,16 @@ mod tests {
         }
     }
 
+    /// Reproducible draws in [0, 1).
+    fn uniform_draws(seed: u64) -> impl FnMut() -> f64 {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        move || rng.random::<f64>()
+    }
+
     #[test]
     fn padded_sweeps_give_the_bounds_checked_result_bit_for_bit() {
-        let mut state = 12345u64;
-        let mut random = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = uniform_draws(12345);
         let boxes: [(&[f64], usize); 5] = [
             (&[13.0, 7.0], 2),
             (&[1.0, 9.0], 2),
@@ -560,13 +561,7 @@ mod tests {
     /// far the lowered values reach (rate and depth vary).
     #[test]
     fn sweeps_near_lowered_samples_give_the_full_result_bit_for_bit() {
-        let mut state = 987654321u64;
-        let mut random = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = uniform_draws(987654321);
         let boxes: [(&[f64], usize); 4] = [
             (&[61.0, 37.0], 2),
             (&[23.0, 29.0, 31.0], 3),
