@@ -37,7 +37,8 @@
 //! facet): on a coarse start mesh the interfaces are staircases of large
 //! cells, which the edge profile would take for blur.
 
-use super::edge_blur::{normal_quantile, EdgeProfile, PROFILE_REACH};
+use super::censored::normal_quantile;
+use super::edge_blur::{EdgeProfile, PROFILE_REACH};
 use super::image::ImageView;
 use super::integrate::{CellStats, PhaseStats};
 use super::phase_distance::PhaseDistances;

@@ -333,27 +333,37 @@ pub(super) fn normal_cdf(x: f64) -> f64 {
     0.5 * libm::erfc(-x / std::f64::consts::SQRT_2)
 }
 
+/// The `q`-quantile of the standard normal distribution (`Φ⁻¹(q)`, by
+/// bisection; `q` in `(0, 1)`).
+pub(super) fn normal_quantile(q: f64) -> f64 {
+    let (mut lo, mut hi) = (-12.0, 12.0);
+    for _ in 0..80 {
+        let mid = 0.5 * (lo + hi);
+        if normal_cdf(mid) < q {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    #[test]
+    fn the_quantile_inverts_the_distribution_function() {
+        for q in [0.01, 0.25, 0.5, 0.75, 0.9] {
+            assert!((normal_cdf(normal_quantile(q)) - q).abs() < 1e-12, "{q}");
+        }
+        assert!((normal_quantile(0.75) - 0.674_489_75).abs() < 1e-6);
+    }
+
     /// Deterministic standard normal quantiles for `n` evenly spaced levels.
     fn normal_sample(n: usize) -> Vec<f64> {
         (0..n)
-            .map(|i| {
-                let p = (i as f64 + 0.5) / n as f64;
-                // Bisection on the distribution function.
-                let (mut lo, mut hi) = (-10.0, 10.0);
-                for _ in 0..80 {
-                    let m = 0.5 * (lo + hi);
-                    if normal_cdf(m) < p {
-                        lo = m;
-                    } else {
-                        hi = m;
-                    }
-                }
-                0.5 * (lo + hi)
-            })
+            .map(|i| normal_quantile((i as f64 + 0.5) / n as f64))
             .collect()
     }
 

@@ -162,34 +162,11 @@ fn golden_section_min(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// The `q`-quantile of the standard normal distribution (`Φ⁻¹(q)`, by
-/// bisection; `q` in `(0, 1)`).
-pub fn normal_quantile(q: f64) -> f64 {
-    let (mut lo, mut hi) = (-12.0, 12.0);
-    for _ in 0..80 {
-        let mid = 0.5 * (lo + hi);
-        if normal_cdf(mid) < q {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::dim::D3;
     use crate::phantom::blur::gaussian_blur_3d;
-
-    #[test]
-    fn the_quantile_inverts_the_distribution_function() {
-        for q in [0.01, 0.25, 0.5, 0.75, 0.9] {
-            assert!((normal_cdf(normal_quantile(q)) - q).abs() < 1e-12, "{q}");
-        }
-        assert!((normal_quantile(0.75) - 0.674_489_75).abs() < 1e-6);
-    }
 
     /// Two slabs blurred by a Gaussian of 1.5 voxels and segmented exactly
     /// at their edge: the estimate is that blur.
