@@ -382,12 +382,23 @@ impl<K: Connectivity> Complex<K> {
                 .any(|&c| self.is_degenerate_sized(c, params, sizing))
         };
         if walk.vertices.len() < PARALLEL_STARS_FROM || rayon::current_num_threads() < 2 {
+            // Neighbouring stars share most of their cells: each is measured
+            // once (the search stops at the first degenerate one, so every
+            // cell met again was found sound).
+            walk.checked.start(self.cell_capacity());
             for &v in &walk.vertices {
                 if memo.still_sound(self, v) {
                     continue;
                 }
-                if star_degenerate(v, &mut walk.star) {
-                    return true;
+                self.star_into(v, &mut walk.star);
+                for &c in &walk.star {
+                    if walk.checked.contains(c) {
+                        continue;
+                    }
+                    if self.is_degenerate_sized(c, params, sizing) {
+                        return true;
+                    }
+                    walk.checked.insert(c);
                 }
                 memo.set_sound(self, v);
             }

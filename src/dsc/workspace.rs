@@ -106,6 +106,42 @@ pub(crate) struct WalkScratch {
     pub(super) work: Vec<CellId>,
     /// Per vertex of `vertices`: whether its star holds a degenerate cell.
     pub(super) degenerate: Vec<bool>,
+    /// Cells found not degenerate by the current search for degenerate
+    /// cells (see [`CheckedCells`]).
+    pub(super) checked: CheckedCells,
+}
+
+/// The cells one search for degenerate cells has found sound, so that a
+/// cell shared by the stars of several vertices is measured once. A cell
+/// is marked with the search's number: starting a search forgets the last
+/// one's marks without clearing the array.
+#[derive(Debug, Default)]
+pub(crate) struct CheckedCells {
+    search: u32,
+    marks: Vec<u32>,
+}
+
+impl CheckedCells {
+    /// Starts a search over a complex of `cells` cell ids.
+    pub(super) fn start(&mut self, cells: usize) {
+        self.search = self.search.wrapping_add(1);
+        if self.search == 0 {
+            // (the numbers went round: no mark may look current)
+            self.marks.iter_mut().for_each(|m| *m = 0);
+            self.search = 1;
+        }
+        self.marks.resize(cells, 0);
+    }
+
+    /// Whether this search already found `c` sound.
+    pub(super) fn contains(&self, c: CellId) -> bool {
+        self.marks[c.index()] == self.search
+    }
+
+    /// Records that this search found `c` sound.
+    pub(super) fn insert(&mut self, c: CellId) {
+        self.marks[c.index()] = self.search;
+    }
 }
 
 /// The buffers of a [`Region`](super::Region): its cells, their marks by
