@@ -97,7 +97,7 @@ impl<K: Dim> Complex<K> {
             }
         }
         let n_cells = cells.len();
-        let neighbours = glue_facets::<K>(&cells)?;
+        let neighbours = glue_facets::<K>(&cells, points.len())?;
         let mut vertex_cell = vec![None; points.len()];
         for (ci, cell) in cells.iter().enumerate() {
             for &v in cell.as_ref() {
@@ -161,14 +161,11 @@ impl<K: Dim> Complex<K> {
 /// The neighbour across every facet: the facets of all cells sorted by
 /// their vertices, so each shared facet appears as two consecutive entries.
 /// A facet held by more than two cells is rejected (non-manifold).
-fn glue_facets<K: Dim>(cells: &[K::Cell]) -> Result<Vec<K::Neighbours>, BuildError> {
-    let mut facets: Vec<(FacetKey, u32, u8)> = Vec::with_capacity(cells.len() * K::NV);
-    for (ci, cell) in cells.iter().enumerate() {
-        for i in 0..K::NV {
-            facets.push((facet_key(cell.as_ref(), i), ci as u32, i as u8));
-        }
-    }
-    facets.sort_unstable();
+fn glue_facets<K: Dim>(
+    cells: &[K::Cell],
+    vertices: usize,
+) -> Result<Vec<K::Neighbours>, BuildError> {
+    let facets = facets_sorted::<K>(cells, vertices);
     let mut neighbours = vec![K::no_neighbours(); cells.len()];
     for run in facets.chunk_by(|x, y| x.0 == y.0) {
         match run {
@@ -181,6 +178,38 @@ fn glue_facets<K: Dim>(cells: &[K::Cell]) -> Result<Vec<K::Neighbours>, BuildErr
         }
     }
     Ok(neighbours)
+}
+
+/// Every facet of `cells` as (key, cell, opposite corner), in increasing
+/// order. A key's first entry is its smallest vertex, so the facets are
+/// first distributed by that vertex (a counting sort, linear in their
+/// number) and only each vertex's few facets are compared: a mesh of many
+/// cells is glued without sorting all its facets at once.
+fn facets_sorted<K: Dim>(cells: &[K::Cell], vertices: usize) -> Vec<(FacetKey, u32, u8)> {
+    let facets = || {
+        cells.iter().enumerate().flat_map(|(ci, cell)| {
+            (0..K::NV).map(move |i| (facet_key(cell.as_ref(), i), ci as u32, i as u8))
+        })
+    };
+    // start[v]: where the facets whose smallest vertex is v begin
+    let mut start = vec![0usize; vertices + 1];
+    for (key, _, _) in facets() {
+        start[key[0] as usize + 1] += 1;
+    }
+    for v in 0..vertices {
+        start[v + 1] += start[v];
+    }
+    let mut next = start.clone();
+    let mut sorted = vec![([0u32; 3], 0u32, 0u8); start[vertices]];
+    for facet in facets() {
+        let slot = &mut next[facet.0[0] as usize];
+        sorted[*slot] = facet;
+        *slot += 1;
+    }
+    for v in 0..vertices {
+        sorted[start[v]..start[v + 1]].sort_unstable();
+    }
+    sorted
 }
 
 /// The vertices and inner triangles of a spade triangulation, numbered as
