@@ -241,6 +241,7 @@ impl Raster for D2 {
         }
     }
 
+    #[inline]
     fn facet_samples(
         c: &[Vector2<f64>],
         spacing: f64,
@@ -256,6 +257,7 @@ impl Raster for D2 {
         }
     }
 
+    #[inline]
     fn sample(image: &ImageView<'_>, p: Vector2<f64>) -> f64 {
         let (w, h) = (image.dims[0], image.dims[1]);
         let x = (p.x - 0.5).clamp(0.0, (w - 1) as f64);
