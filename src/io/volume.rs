@@ -1038,14 +1038,18 @@ pub fn save_nifti(path: impl AsRef<Path>, volume: &Volume) -> Result<()> {
 /// page carries it as Fiji/ImageJ does: pixels per unit in
 /// `XResolution`/`YResolution` and `unit=`/`spacing=` in an `ImageJ=`
 /// description (read back by [`Volume::load_tiff`] and `vtkTIFFReader`).
+///
+/// The pixels of all pages are one contiguous block, as ImageJ writes its
+/// stacks: ImageJ (and tifffile) read an `ImageJ=` stack of `images=N` as N
+/// planes back to back from the first page's data, ignoring the other pages'
+/// directories. Every page still points at its own plane, so readers that
+/// follow the directories (libtiff, VTK) read the same stack.
 pub fn save_labels_tiff(
     path: impl AsRef<Path>,
     dims: [usize; 3],
     labels: &[u8],
     resolution: Option<&Resolution>,
 ) -> Result<()> {
-    use tiff::encoder::colortype::Gray8;
-    use tiff::tags::{ResolutionUnit, Tag};
     let path = path.as_ref();
     let [nx, ny, nz] = dims;
     if labels.len() != nx * ny * nz {
@@ -1065,21 +1069,79 @@ pub fn save_labels_tiff(
     let enc_err = |e: tiff::TiffError| IoError::write(path, std::io::Error::other(e));
     {
         let mut enc = tiff::encoder::TiffEncoder::new(&mut buf).map_err(enc_err)?;
-        for slice in labels.chunks_exact(nx * ny) {
-            let mut page = enc.new_image::<Gray8>(w, h).map_err(enc_err)?;
-            if let Some(r) = resolution {
-                let desc = imagej_description(nz, r);
-                page.encoder()
-                    .write_tag(Tag::ImageDescription, desc.as_str())
-                    .map_err(enc_err)?;
-                page.resolution_unit(ResolutionUnit::None);
-                page.x_resolution(rational(1.0 / r.spacing[0]));
-                page.y_resolution(rational(1.0 / r.spacing[1]));
-            }
-            page.write_data(slice).map_err(enc_err)?;
+        let mut first = enc.image_directory().map_err(enc_err)?;
+        let start = first.write_data(labels).map_err(enc_err)?;
+        let page_bytes = (nx * ny) as u64;
+        let page = StackPage {
+            width: w,
+            height: h,
+            resolution,
+            slices: nz,
+        };
+        page.write_tags(&mut first, start).map_err(enc_err)?;
+        first.finish().map_err(enc_err)?;
+        for z in 1..nz as u64 {
+            let mut dir = enc.image_directory().map_err(enc_err)?;
+            page.write_tags(&mut dir, start + z * page_bytes)
+                .map_err(enc_err)?;
+            dir.finish().map_err(enc_err)?;
         }
     }
     write_bytes_atomic(path, buf.get_ref())
+}
+
+/// The directory of one page of an 8-bit stack written by [`save_labels_tiff`].
+struct StackPage<'a> {
+    width: u32,
+    height: u32,
+    resolution: Option<&'a Resolution>,
+    slices: usize,
+}
+
+impl StackPage<'_> {
+    /// Writes the page's tags: one uncompressed strip of 8-bit gray pixels at
+    /// `strip_offset`, and the resolution if there is one.
+    fn write_tags<W: std::io::Write + std::io::Seek>(
+        &self,
+        dir: &mut tiff::encoder::DirectoryEncoder<'_, W, tiff::encoder::TiffKindStandard>,
+        strip_offset: u64,
+    ) -> tiff::TiffResult<()> {
+        use tiff::tags::{PhotometricInterpretation, ResolutionUnit, Tag};
+        let offset = u32::try_from(strip_offset).map_err(|_| tiff::TiffError::LimitsExceeded)?;
+        dir.write_tag(Tag::ImageWidth, self.width)?;
+        dir.write_tag(Tag::ImageLength, self.height)?;
+        dir.write_tag(Tag::BitsPerSample, 8u16)?;
+        dir.write_tag(Tag::Compression, 1u16)?;
+        dir.write_tag(
+            Tag::PhotometricInterpretation,
+            PhotometricInterpretation::BlackIsZero.to_u16(),
+        )?;
+        dir.write_tag(Tag::StripOffsets, offset)?;
+        dir.write_tag(Tag::SamplesPerPixel, 1u16)?;
+        dir.write_tag(Tag::RowsPerStrip, self.height)?;
+        let strip_bytes = self
+            .width
+            .checked_mul(self.height)
+            .ok_or(tiff::TiffError::LimitsExceeded)?;
+        dir.write_tag(Tag::StripByteCounts, strip_bytes)?;
+        match self.resolution {
+            Some(r) => {
+                dir.write_tag(
+                    Tag::ImageDescription,
+                    imagej_description(self.slices, r).as_str(),
+                )?;
+                dir.write_tag(Tag::XResolution, rational(1.0 / r.spacing[0]))?;
+                dir.write_tag(Tag::YResolution, rational(1.0 / r.spacing[1]))?;
+                dir.write_tag(Tag::ResolutionUnit, ResolutionUnit::None.to_u16())?;
+            }
+            None => {
+                dir.write_tag(Tag::XResolution, rational(1.0))?;
+                dir.write_tag(Tag::YResolution, rational(1.0))?;
+                dir.write_tag(Tag::ResolutionUnit, ResolutionUnit::None.to_u16())?;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Fiji/ImageJ's description of a stack of `nz` slices with this resolution.
@@ -1376,6 +1438,33 @@ mod tests {
             Volume::load(&pm),
             Err(IoError::DimensionMismatch { .. })
         ));
+    }
+
+    /// ImageJ reads an `ImageJ=` stack as `images=N` planes back to back
+    /// from the first page's strip; every page must also point at its own.
+    #[test]
+    fn tiff_stack_pixels_are_contiguous_as_imagej_reads_them() {
+        use tiff::decoder::Decoder;
+        use tiff::tags::Tag;
+        let dir = tempfile::tempdir().unwrap();
+        let (nx, ny, nz) = (5usize, 3usize, 4usize);
+        let labels: Vec<u8> = (0..nx * ny * nz).map(|i| (i % 7) as u8).collect();
+        let p = dir.path().join("labels.tif");
+        let r = Resolution {
+            spacing: [0.5, 0.5, 2.0],
+            unit: "um".into(),
+        };
+        save_labels_tiff(&p, [nx, ny, nz], &labels, Some(&r)).unwrap();
+        let bytes = std::fs::read(&p).unwrap();
+        let mut decoder = Decoder::new(Cursor::new(&bytes)).unwrap();
+        let first = decoder.get_tag_u32(Tag::StripOffsets).unwrap() as usize;
+        assert_eq!(&bytes[first..first + labels.len()], &labels[..]);
+        for z in 1..nz {
+            decoder.next_image().unwrap();
+            let offset = decoder.get_tag_u32(Tag::StripOffsets).unwrap() as usize;
+            assert_eq!(offset, first + z * nx * ny);
+        }
+        assert!(!decoder.more_images());
     }
 
     #[test]
