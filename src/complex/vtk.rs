@@ -6,7 +6,10 @@
 //! written in world coordinates ([`Frame::domain_to_world`]), where VTK's
 //! readers place the input's pixels and voxels. Phases are written through
 //! an `order` map (mesh label → output index, e.g. the driver's phases by
-//! increasing mean).
+//! increasing mean). Where the frame mirrors (a negative determinant,
+//! [`Frame::is_mirrored`]) every cell and interface triangle is written with
+//! two corners swapped, so that cells stay positively oriented and normals
+//! keep pointing from `phase` to `phase_other` in the world.
 
 use super::{Complex, Label};
 use crate::dim::{Dim, D2, D3};
@@ -61,8 +64,11 @@ impl<const M: usize> Interface<M> {
                 write_vtp_lines(path, &points, &segs, &data)
             }
             _ => {
-                let tris: Vec<[u32; 3]> =
+                let mut tris: Vec<[u32; 3]> =
                     flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+                if frame.is_mirrored() {
+                    tris.iter_mut().for_each(|t| t.swap(1, 2));
+                }
                 write_vtp(path, &points, &tris, &data)
             }
         }
@@ -121,12 +127,19 @@ impl<K: Dim> Complex<K> {
             .iter()
             .map(|&p| frame.domain_to_world(p))
             .collect();
-        let (tris, tets);
+        let mirrored = frame.is_mirrored();
+        let (mut tris, mut tets);
         let cells = if K::N == 2 {
             tris = arrays.triangles();
+            if mirrored {
+                tris.iter_mut().for_each(|t| t.swap(1, 2));
+            }
             Cells::Triangles(&tris)
         } else {
             tets = arrays.tetrahedra();
+            if mirrored {
+                tets.iter_mut().for_each(|t| t.swap(2, 3));
+            }
             Cells::Tetrahedra(&tets)
         };
         write_vtu(path, &points, cells, &[("phase", CellArray::I32(&phase))])

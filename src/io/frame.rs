@@ -167,6 +167,18 @@ impl Frame {
         self.index_to_world(self.domain_to_index(p))
     }
 
+    /// Whether the index-to-world map reverses orientation (its linear part
+    /// has a negative determinant): a PNG's rows counted upwards, a NIfTI
+    /// affine with one axis flipped (radiological order). A cell positively
+    /// oriented in the mesh is then negatively oriented in the world, so the
+    /// VTK writers swap two of its corners (see [`Complex::write_mesh_vtu`](crate::complex::Complex::write_mesh_vtu)).
+    pub fn is_mirrored(&self) -> bool {
+        let [a, b, c] = self.index_to_world.map(|r| [r[0], r[1], r[2]]);
+        let det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+            + a[2] * (b[0] * c[1] - b[1] * c[0]);
+        det < 0.0
+    }
+
     /// Physical area (2D) or volume (3D) of one pixel/voxel.
     pub fn voxel_measure(&self) -> f64 {
         if self.dims[2] > 1 {
@@ -232,6 +244,27 @@ mod tests {
         let g = Frame::image_rows_down(6, 4, [0.1, 0.2], "mm");
         assert_eq!(g.domain_to_world([1.5, 0.5, 0.0]), [0.1, 0.0, 0.0]);
         assert!((g.voxel_measure() - 0.02).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_frame_mirrors_where_its_determinant_is_negative() {
+        assert!(Frame::image_rows_up(6, 4, [1.0, 1.0], "px").is_mirrored());
+        assert!(!Frame::image_rows_down(6, 4, [1.0, 1.0], "px").is_mirrored());
+        assert!(!Frame::volume([4, 4, 4], [1.0, 1.0, 3.0], "mm").is_mirrored());
+        let flip_x = [
+            [-1.0, 0.0, 0.0, 10.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 3.0, 0.0],
+        ];
+        assert!(Frame::volume_affine([4, 4, 4], [1.0, 1.0, 3.0], "mm", flip_x).is_mirrored());
+        let flip_x_and_y = [
+            [-1.0, 0.0, 0.0, 10.0],
+            [0.0, -1.0, 0.0, 0.0],
+            [0.0, 0.0, 3.0, 0.0],
+        ];
+        assert!(
+            !Frame::volume_affine([4, 4, 4], [1.0, 1.0, 3.0], "mm", flip_x_and_y).is_mirrored()
+        );
     }
 
     #[test]

@@ -28,17 +28,55 @@ fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
     (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt()
 }
 
+/// The points of a `.vtu` or `.vtp` file and the corners of its cells
+/// (tetrahedra or triangles), as a viewer reads them.
+fn points_and_cells(path: &std::path::Path) -> (Vec<[f64; 3]>, Vec<Vec<usize>>) {
+    let vtk = Vtk::import(path).unwrap();
+    let (points, cells) = match vtk.data {
+        DataSet::PolyData { pieces, .. } => {
+            let Piece::Inline(piece) = pieces.into_iter().next().unwrap() else {
+                panic!("not inline")
+            };
+            (piece.points, piece.polys.expect("triangles"))
+        }
+        DataSet::UnstructuredGrid { pieces, .. } => {
+            let Piece::Inline(piece) = pieces.into_iter().next().unwrap() else {
+                panic!("not inline")
+            };
+            (piece.points, piece.cells.cell_verts)
+        }
+        _ => panic!("neither polydata nor an unstructured grid"),
+    };
+    let flat: Vec<f64> = points.cast_into().unwrap();
+    let points = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let (connectivity, offsets) = cells.into_xml();
+    let mut start = 0;
+    let cells = offsets
+        .iter()
+        .map(|&end| {
+            let cell = connectivity[start..end as usize]
+                .iter()
+                .map(|&v| v as usize)
+                .collect();
+            start = end as usize;
+            cell
+        })
+        .collect();
+    (points, cells)
+}
+
 /// The interface points of `interface.vtp`.
 fn interface_points(path: &std::path::Path) -> Vec<[f64; 3]> {
-    let vtk = Vtk::import(path).unwrap();
-    let DataSet::PolyData { pieces, .. } = vtk.data else {
-        panic!("not polydata")
-    };
-    let Piece::Inline(p) = &pieces[0] else {
-        panic!("not inline")
-    };
-    let flat: Vec<f64> = p.points.clone().cast_into().unwrap();
-    flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+    points_and_cells(path).0
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|c| a[c] - b[c])
+}
+
+fn triple(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+        + a[2] * (b[0] * c[1] - b[1] * c[0])
 }
 
 #[test]
@@ -112,6 +150,34 @@ fn an_anisotropic_flipped_nifti_ball_is_round_in_millimetres_and_keeps_its_geome
     // Within one z voxel (2 mm), the size the data resolves.
     assert!((ez - ex).abs() < 2.0 && (ey - ex).abs() < 2.0, "extents");
     assert!(spread <= 0.10, "radius spread {spread}");
+
+    // The affine mirrors (x flipped): the cells must still be positively
+    // oriented in the world, and the interface normals point from phase 0
+    // (outside) into phase 1 (the ball), so the triangles enclose minus
+    // the ball's volume.
+    let (points, tets) = points_and_cells(&job.out.join("mesh.vtu"));
+    let inverted = tets
+        .iter()
+        .filter(|t| {
+            let [a, b, c, d] = [0, 1, 2, 3].map(|k| points[t[k]]);
+            triple(sub(b, a), sub(c, a), sub(d, a)) <= 0.0
+        })
+        .count();
+    assert_eq!(
+        inverted,
+        0,
+        "{inverted} of {} tetrahedra inverted",
+        tets.len()
+    );
+    let (points, triangles) = points_and_cells(&job.out.join("interface.vtp"));
+    let enclosed: f64 = triangles
+        .iter()
+        .map(|t| triple(points[t[0]], points[t[1]], points[t[2]]) / 6.0)
+        .sum();
+    assert!(
+        (enclosed + inside).abs() < 0.05 * inside,
+        "enclosed {enclosed} mm³, ball {inside}"
+    );
 }
 
 /// The same volume with its voxel size given in different units (a
