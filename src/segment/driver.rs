@@ -13,6 +13,7 @@ use super::params::{
     contrast_edge_length, contrast_rigidity, sample_step, smallest_extent, SegmentParams,
 };
 use super::raster::Raster;
+use super::band_phase::{band_phases, range_counts, VoxelSize};
 use super::reseed::{any_lost, lost_phases, merge_phase, split_most_structured_phase, LostPhase};
 use super::smoothing::force_smoothing;
 use super::thresholds::smallest_class_gap;
@@ -232,6 +233,10 @@ pub struct Segmentation<'a, K: Raster> {
     range: (f64, f64),
     intensity: IntensityStats,
     initial_thresholds: Vec<f64>,
+    /// The voxels within each phase's initial threshold range (empty when
+    /// the initialisation drew no thresholds): what a phase that ends as a
+    /// band along other phases' edges is measured against.
+    initial_range_counts: Vec<u64>,
     reseeds: usize,
     times: StageTimes,
     history: Vec<IterationRecord>,
@@ -365,6 +370,11 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             },
         )?;
         let initial_thresholds = models.init.thresholds();
+        let initial_range_counts = if initial_thresholds.len() + 1 == params.phases {
+            range_counts(image.data, &initial_thresholds)
+        } else {
+            Vec::new()
+        };
         if let Some(c) = complex
             .cell_ids()
             .find(|&c| complex.label(c) as usize >= params.phases)
@@ -402,6 +412,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             range,
             intensity,
             initial_thresholds,
+            initial_range_counts,
             reseeds: 0,
             times: StageTimes::default(),
             history: Vec::new(),
@@ -748,19 +759,50 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         0.3 * self.intensity.noise + 1e-3 * self.intensity.scale()
     }
 
-    /// Phases lost now: empty, or duplicating another's mean.
+    /// Phases lost now: empty, duplicating another's mean, or shrunk to a
+    /// band along the edge between two others.
     pub fn lost_phases(&self) -> Vec<LostPhase> {
-        lost_phases(&self.phases, self.duplicate_tolerance())
+        let mut lost = lost_phases(&self.phases, self.duplicate_tolerance());
+        lost.extend(self.band_phases());
+        lost
     }
 
-    /// Merges each duplicate phase into its twin and re-seeds every lost
+    /// The phases that ended as a band along the edge between two others
+    /// ([`super::band_phase`]), in runs that model such bands
+    /// (`band_flips`; `--keep-thin-layers` says thin layers are real); a
+    /// phase already listed lost is not listed again.
+    fn band_phases(&self) -> Vec<LostPhase> {
+        if !self.params.band_flips {
+            return Vec::new();
+        }
+        let spacing = &self.image.spacing[..K::N];
+        let voxel = VoxelSize {
+            measure: spacing.iter().product(),
+            smallest_side: spacing.iter().copied().fold(f64::INFINITY, f64::min),
+        };
+        let listed = lost_phases(&self.phases, self.duplicate_tolerance());
+        band_phases(&self.complex, &self.phases, &self.initial_range_counts, voxel)
+            .into_iter()
+            .filter(|b| !listed.iter().any(|l| l.label() == b.phase))
+            .map(|b| LostPhase::Band {
+                phase: b.phase,
+                twin: b.nearer,
+            })
+            .collect()
+    }
+
+    /// Merges each duplicate phase, and each band along the edge between two
+    /// others, into its twin and re-seeds every lost
     /// label by splitting the phase with the most structure beyond noise (at most `2·N`
     /// times a run, so data with fewer phases than asked cannot cycle);
     /// returns how many labels were re-seeded. After a re-seed the length
     /// weight is measured again from the new means and the stopping rule
     /// starts over.
     fn recover_lost_phases(&mut self) -> usize {
-        if !self.params.reseed || !any_lost(&self.phases, self.duplicate_tolerance()) {
+        if !self.params.reseed {
+            return 0;
+        }
+        if !any_lost(&self.phases, self.duplicate_tolerance()) && self.band_phases().is_empty() {
             return 0;
         }
         let t = Instant::now();
@@ -769,7 +811,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             if self.reseeds >= 2 * self.params.phases {
                 break;
             }
-            if let LostPhase::Duplicate { phase, twin } = lost {
+            if let LostPhase::Duplicate { phase, twin } | LostPhase::Band { phase, twin } = lost {
                 merge_phase(&mut self.complex, phase, twin);
                 self.phases.update(&self.complex, &self.cells);
             }

@@ -45,6 +45,7 @@
 pub mod adaptive;
 pub mod auto;
 pub mod band_flips;
+pub mod band_phase;
 pub mod censored;
 pub mod cluster_flips;
 pub mod contrast;

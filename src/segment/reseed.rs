@@ -3,9 +3,11 @@
 //! With `N` phases asked for, the evolution can end with a phase that covers
 //! no pixel, or with two phases whose means coincide (both holding a mix of
 //! the same two true phases, e.g. 0.390 and 0.391 on an image with means 0.35
-//! and 0.5). Either way the result has fewer than `N` distinct phases while
-//! the stopping rule sees nothing wrong. [`lost_phases`] finds them; the driver
-//! then merges a duplicate into its twin and re-seeds the lost label by
+//! and 0.5), or, in 3D with three or more phases, with a phase that is only
+//! the blur of the edge between two others ([`super::band_phase`]). Either
+//! way the result has fewer than `N` distinct phases while the stopping rule
+//! sees nothing wrong. [`lost_phases`] finds the first two, the driver the
+//! bands; it then merges a duplicate or a band into its twin and re-seeds the lost label by
 //! splitting the phase whose cells' means hold the most structure beyond
 //! noise ([`split_most_structured_phase`]) at the least-variance threshold of its cell
 //! means, and warns when it cannot.
@@ -31,13 +33,25 @@ pub enum LostPhase {
         /// The phase it duplicates.
         twin: Label,
     },
+    /// The phase shrank to a band along the edge between two others, its
+    /// mean between theirs, thinner than a voxel or holding a fraction of
+    /// the voxels its initial threshold range held ([`super::band_phase`];
+    /// runs with blurred-band flips only).
+    Band {
+        /// The band's phase.
+        phase: Label,
+        /// The bordering phase whose mean is nearer the band's.
+        twin: Label,
+    },
 }
 
 impl LostPhase {
     /// The label that is lost.
     pub fn label(&self) -> Label {
         match *self {
-            LostPhase::Empty(l) | LostPhase::Duplicate { phase: l, .. } => l,
+            LostPhase::Empty(l)
+            | LostPhase::Duplicate { phase: l, .. }
+            | LostPhase::Band { phase: l, .. } => l,
         }
     }
 
@@ -60,6 +74,14 @@ impl LostPhase {
                      (report.json phases gives their means)"
                 )
             }
+            LostPhase::Band { phase: a, twin: b } => format!(
+                "phase {} ends as a band along the edges of phase {}, its mean between \
+                 its two neighbours' and thinner than a voxel or holding under a quarter \
+                 of the voxels of its initial threshold range (the blur of an edge: a thin \
+                 class of the image may have been lost)",
+                phase(a),
+                phase(b)
+            ),
         }
     }
 }
