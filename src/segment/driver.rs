@@ -1,6 +1,7 @@
 //! The iteration driver: integrate, flip, compute forces, deform, check convergence.
 
 use super::adaptive::{AdaptiveSizing, Sizes};
+use super::band_phase::{band_phases, range_counts, VoxelSize};
 use super::contrast::phase_contrast;
 use super::error::SegmentError;
 use super::force_stage::{ForceStage, Reach};
@@ -13,7 +14,6 @@ use super::params::{
     contrast_edge_length, contrast_rigidity, sample_step, smallest_extent, SegmentParams,
 };
 use super::raster::Raster;
-use super::band_phase::{band_phases, range_counts, VoxelSize};
 use super::reseed::{any_lost, lost_phases, merge_phase, split_most_structured_phase, LostPhase};
 use super::smoothing::force_smoothing;
 use super::thresholds::smallest_class_gap;
@@ -781,14 +781,19 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             smallest_side: spacing.iter().copied().fold(f64::INFINITY, f64::min),
         };
         let listed = lost_phases(&self.phases, self.duplicate_tolerance());
-        band_phases(&self.complex, &self.phases, &self.initial_range_counts, voxel)
-            .into_iter()
-            .filter(|b| !listed.iter().any(|l| l.label() == b.phase))
-            .map(|b| LostPhase::Band {
-                phase: b.phase,
-                twin: b.nearer,
-            })
-            .collect()
+        band_phases(
+            &self.complex,
+            &self.phases,
+            &self.initial_range_counts,
+            voxel,
+        )
+        .into_iter()
+        .filter(|b| !listed.iter().any(|l| l.label() == b.phase))
+        .map(|b| LostPhase::Band {
+            phase: b.phase,
+            twin: b.nearer,
+        })
+        .collect()
     }
 
     /// Merges each duplicate phase, and each band along the edge between two

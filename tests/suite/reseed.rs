@@ -188,9 +188,17 @@ fn a_thin_class_lost_as_a_band_is_reported() {
     let labels = seg.label_image();
     let fat = |v: &[u8]| v.iter().map(|&l| l == 1).collect::<Vec<bool>>();
     let (found, fat_truth) = (fat(&labels), fat(&truth));
-    let both = found.iter().zip(&fat_truth).filter(|(a, b)| **a && **b).count();
+    let both = found
+        .iter()
+        .zip(&fat_truth)
+        .filter(|(a, b)| **a && **b)
+        .count();
     let sizes = found.iter().filter(|&&a| a).count() + fat_truth.iter().filter(|&&b| b).count();
     let dice = 2.0 * both as f64 / sizes as f64;
     let warned = report.warnings.iter().any(|w| w.contains("band"));
-    assert!(dice > 0.7 || warned, "fat Dice {dice}, warnings {:?}", report.warnings);
+    assert!(
+        dice > 0.7 || warned,
+        "fat Dice {dice}, warnings {:?}",
+        report.warnings
+    );
 }
