@@ -34,8 +34,8 @@ pub enum LostPhase {
         twin: Label,
     },
     /// The phase shrank to a band along the edge between two others, its
-    /// mean between theirs, thinner than a voxel or holding a fraction of
-    /// the voxels its initial threshold range held ([`super::band_phase`];
+    /// mean between theirs, thinner than a voxel, or than two while holding a
+    /// fraction of the voxels its initial threshold range held ([`super::band_phase`];
     /// runs with blurred-band flips only).
     Band {
         /// The band's phase.
@@ -76,9 +76,9 @@ impl LostPhase {
             }
             LostPhase::Band { phase: a, twin: b } => format!(
                 "phase {} ends as a band along the edges of phase {}, its mean between \
-                 its two neighbours' and thinner than a voxel or holding under a quarter \
-                 of the voxels of its initial threshold range (the blur of an edge: a thin \
-                 class of the image may have been lost)",
+                 its two neighbours', thinner than a voxel or than two holding under a \
+                 quarter of the voxels of its initial threshold range (the blur of an \
+                 edge: a thin class of the image may have been lost)",
                 phase(a),
                 phase(b)
             ),
