@@ -38,7 +38,7 @@ use std::path::{Path, PathBuf};
 use super::atomic::{write_atomic, write_bytes_atomic};
 use super::error::{io_reason, IoError, Result};
 use super::frame::{Affine, Frame, FrameSource};
-use super::image2::{lerp_nodes, Image2};
+use super::image2::{lerp_nodes, Image2, SampleType};
 use super::intensity::IntensityMap;
 use super::resolution::{tiff_resolution, Resolution};
 
@@ -54,6 +54,8 @@ pub struct Volume {
     unit: String,
     /// Loaded to original intensities, when known.
     intensity: Option<IntensityMap>,
+    /// How the file stored its samples ([`SampleType::Float`] in memory).
+    sample_type: SampleType,
     /// Index to world (a NIfTI affine); `None`: `index · spacing`.
     affine: Option<Affine>,
     source: FrameSource,
@@ -82,6 +84,7 @@ impl Volume {
             spacing: [1.0; 3],
             unit: "px".into(),
             intensity: None,
+            sample_type: SampleType::Float,
             affine: None,
             source: FrameSource::Default,
             nifti_header: None,
@@ -171,6 +174,18 @@ impl Volume {
         self
     }
 
+    /// How the file stored its samples ([`SampleType::Float`] for volumes
+    /// built in memory).
+    pub fn sample_type(&self) -> SampleType {
+        self.sample_type
+    }
+
+    /// Returns the volume with the sample type of the file it came from.
+    pub fn with_sample_type(mut self, sample_type: SampleType) -> Self {
+        self.sample_type = sample_type;
+        self
+    }
+
     /// The length unit of [`Volume::spacing`] (`"px"` when unknown).
     pub fn unit(&self) -> &str {
         &self.unit
@@ -215,6 +230,7 @@ impl Volume {
         let mut dec = Decoder::new(BufReader::new(file)).map_err(bad)?;
         let resolution = tiff_resolution(&mut dec);
         let mut raw = Samples::U8(Vec::new());
+        let mut sample_type = SampleType::Uint8;
         let (mut nx, mut ny, mut nz) = (0usize, 0usize, 0usize);
         loop {
             let (w, h) = dec.dimensions().map_err(bad)?;
@@ -240,6 +256,9 @@ impl Volume {
                 }
             }
             let page = dec.read_image().map_err(bad)?;
+            if nz == 0 {
+                sample_type = tiff_sample_type(&page);
+            }
             let ok = match (&mut raw, page) {
                 (Samples::U8(v), DecodingResult::U8(p)) if nz == 0 || !v.is_empty() => {
                     v.extend(p);
@@ -290,6 +309,7 @@ impl Volume {
             nz,
             data,
             intensity: Some(intensity),
+            sample_type,
             spacing: resolution.as_ref().map_or([1.0; 3], |r| r.spacing),
             unit: resolution.as_ref().map_or("px".into(), |r| r.unit.clone()),
             affine: None,
@@ -329,10 +349,22 @@ impl Volume {
         files.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
         let mut data = Vec::new();
         let (mut nx, mut ny) = (0, 0);
+        let mut sample_type = SampleType::Float;
         for (z, f) in files.iter().enumerate() {
             let im = Image2::load(f)?;
             if z == 0 {
                 (nx, ny) = im.dims();
+                sample_type = im.sample_type();
+            } else if im.sample_type() != sample_type {
+                return Err(IoError::Unsupported {
+                    path: f.clone(),
+                    reason: format!(
+                        "slice has {:?} samples, first slice {} has {sample_type:?}: \
+                         the slices of a volume must share one sample type",
+                        im.sample_type(),
+                        files[0].display()
+                    ),
+                });
             } else if im.dims() != (nx, ny) {
                 return Err(IoError::DimensionMismatch {
                     path: f.clone(),
@@ -346,7 +378,11 @@ impl Volume {
             }
             data.extend_from_slice(im.data());
         }
-        Ok(Self::from_raw(nx, ny, files.len(), data))
+        // Each slice is loaded as a 2D image is: its map back to the file's
+        // values is that of its sample type.
+        Ok(Self::from_raw(nx, ny, files.len(), data)
+            .with_intensity(IntensityMap::of_sample_type(sample_type))
+            .with_sample_type(sample_type))
     }
 
     /// Loads a single-file NIfTI-1 volume (`.nii`, or gzip-compressed
@@ -474,6 +510,17 @@ impl Samples {
     }
 }
 
+/// The sample type of a decoded TIFF page.
+fn tiff_sample_type(page: &tiff::decoder::DecodingResult) -> SampleType {
+    use tiff::decoder::DecodingResult as D;
+    match page {
+        D::U8(_) => SampleType::Uint8,
+        D::U16(_) => SampleType::Uint16,
+        D::F16(_) | D::F32(_) | D::F64(_) => SampleType::Float,
+        _ => SampleType::Int,
+    }
+}
+
 /// Appends a decoded TIFF page of any non-8/16-bit-unsigned type as `f64`;
 /// returns false for types we cannot convert.
 fn append_f64(v: &mut Vec<f64>, page: tiff::decoder::DecodingResult) -> bool {
@@ -597,6 +644,17 @@ pub(crate) fn natural_cmp(a: &str, b: &str) -> Ordering {
 
 /// Size of a NIfTI-1 header.
 const NIFTI_HDR: usize = 348;
+
+/// The sample type of NIfTI `datatype` (checked by the caller); `scaled`
+/// samples (`scl_slope`, `scl_inter`) are real numbers whatever their type.
+fn nifti_sample_type(datatype: i16, scaled: bool) -> SampleType {
+    match (datatype, scaled) {
+        (_, true) | (16 | 64, _) => SampleType::Float,
+        (2, false) => SampleType::Uint8,
+        (512, false) => SampleType::Uint16,
+        _ => SampleType::Int,
+    }
+}
 
 /// Parses a decompressed single-file NIfTI-1 image.
 fn parse_nifti(path: &Path, b: &[u8]) -> Result<Volume> {
@@ -765,6 +823,7 @@ fn parse_nifti(path: &Path, b: &[u8]) -> Result<Volume> {
         .with_spacing(spacing)
         .with_unit(nifti_unit(b[123]))
         .with_intensity(intensity)
+        .with_sample_type(nifti_sample_type(datatype, scaled))
         .with_affine(affine, source);
     volume.nifti_header = Some(b[..NIFTI_HDR].to_vec());
     Ok(volume)

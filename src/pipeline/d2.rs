@@ -2,6 +2,7 @@
 //! segmented with the triangle DSC into `labels.png`, overlays, `mesh.vtu`
 //! and `report.json`.
 
+use super::input_summary::InputSummary;
 use super::{
     add_frame_and_phases, check_label_range, check_phantom, mean_dice, run_with_progress,
     GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
@@ -10,7 +11,7 @@ use crate::dim::D2;
 use crate::error::{Error, Result};
 use crate::io::intensity::IntensityMap;
 use crate::io::resolution::{image_frame, is_tiff};
-use crate::io::{save_gray8_png, Colour, Frame, Image2, Overlay, SampleType};
+use crate::io::{save_gray8_png, Colour, Frame, Image2, Overlay};
 use crate::phantom::{self, Phantom2Kind};
 use crate::segment::auto::{choose_phases, PhaseChoice};
 use crate::segment::measurements::Measurements;
@@ -54,35 +55,6 @@ struct Report<'a> {
     input: InputSummary,
     /// The trials of `--phases auto`.
     phase_choice: Option<PhaseChoice>,
-}
-
-/// The input's sample type and its intensities in the file's own units (the
-/// rest of the report is in the loaded units: 8/16-bit data scaled to `[0,1]`).
-#[derive(Serialize)]
-struct InputSummary {
-    sample_type: SampleType,
-    /// Gray samples, the luminance of colour ones, or one channel.
-    colour: Colour,
-    min: f64,
-    max: f64,
-    /// The final phase means by rank (output values 0, 1, ...), in the file's units.
-    phase_means: Vec<Option<f64>>,
-}
-
-impl InputSummary {
-    fn new(image: &Image2, report: &SegmentReport, ordered_means: &[Option<f64>]) -> Self {
-        let t = image.sample_type();
-        InputSummary {
-            sample_type: t,
-            colour: image.colour(),
-            min: t.to_original(report.intensity.min),
-            max: t.to_original(report.intensity.max),
-            phase_means: ordered_means
-                .iter()
-                .map(|m| m.map(|m| t.to_original(m)))
-                .collect(),
-        }
-    }
 }
 
 /// The image's values in the file's units (8/16-bit integers as stored,
@@ -363,7 +335,16 @@ pub(crate) fn segment_image_then<T>(
         times,
         truth_dice,
     );
-    let input = InputSummary::new(image, &report, &run.ordered_means);
+    let intensity = match &provenance.source {
+        Source::File(_) => Some(IntensityMap::of_sample_type(image.sample_type())),
+        _ => None,
+    };
+    let input = InputSummary::new(
+        (image.sample_type(), image.colour()),
+        intensity,
+        &report,
+        &run.ordered_means,
+    );
     let rep = Report {
         run,
         width: w,
@@ -379,10 +360,6 @@ pub(crate) fn segment_image_then<T>(
     let frame = match image.spacing() {
         Some([sx, sy]) => frame.respaced([sx, sy, 1.0]),
         None => frame,
-    };
-    let intensity = match &provenance.source {
-        Source::File(path) => IntensityMap::of_image_file(path),
-        _ => None,
     };
     let order = seg.phase_order();
     let measurements =

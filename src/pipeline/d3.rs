@@ -3,6 +3,7 @@
 //! `mesh.vtu`, `interface.vtp` and `report.json` through the same staged,
 //! all-or-nothing output directory as the 2D job.
 
+use super::input_summary::InputSummary;
 use super::{
     add_frame_and_phases, check_label_range, check_phantom, mean_dice, run_with_progress,
     GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
@@ -10,7 +11,7 @@ use super::{
 use crate::dim::D3;
 use crate::error::{Error, Result};
 use crate::io::intensity::IntensityMap;
-use crate::io::{save_labels_tiff, Volume};
+use crate::io::{save_labels_tiff, Colour, Volume};
 use crate::phantom::noise::to_u8;
 use crate::phantom::Phantom3Kind;
 use crate::segment::measurements::Measurements;
@@ -69,7 +70,7 @@ struct Report<'a> {
     #[serde(flatten)]
     run: RunReport<'a>,
     dims: [usize; 3],
-    input: VolumeInput,
+    input: InputSummary,
     init_surface: Option<&'a Path>,
     junction_edges: usize,
     quality: QualitySummary,
@@ -84,33 +85,6 @@ fn in_file_units(volume: &Volume) -> Vec<f32> {
         .iter()
         .map(|&v| map.original(f64::from(v)) as f32)
         .collect()
-}
-
-/// The volume's intensity range and final phase means in the file's own
-/// units (the rest of the report is in the loaded units, `[0, 1]` for
-/// 8/16-bit data and stretched from the range for other types), or in the
-/// loaded units when the way back is unknown (an array handed over in memory).
-#[derive(Serialize)]
-struct VolumeInput {
-    /// `"file"` or `"normalised"`.
-    intensity_unit: &'static str,
-    min: f64,
-    max: f64,
-    /// The final phase means by rank (output values 0, 1, ...).
-    phase_means: Vec<Option<f64>>,
-}
-
-impl VolumeInput {
-    fn new(volume: &Volume, report: &SegmentReport, ordered_means: &[Option<f64>]) -> Self {
-        let map = volume.intensity();
-        let original = |v: f64| map.map_or(v, |m| m.original(v));
-        VolumeInput {
-            intensity_unit: if map.is_some() { "file" } else { "normalised" },
-            min: original(report.intensity.min),
-            max: original(report.intensity.max),
-            phase_means: ordered_means.iter().map(|m| m.map(original)).collect(),
-        }
-    }
 }
 
 fn quality(c: &crate::complex::Complex3) -> QualitySummary {
@@ -319,7 +293,12 @@ pub(crate) fn segment_volume_then<T>(
         times,
         truth_dice,
     );
-    let input = VolumeInput::new(volume, &report, &run.ordered_means);
+    let input = InputSummary::new(
+        (volume.sample_type(), Colour::Gray),
+        volume.intensity(),
+        &report,
+        &run.ordered_means,
+    );
     let rep = Report {
         run,
         dims,

@@ -15,6 +15,7 @@
 
 pub mod d2;
 pub mod d3;
+mod input_summary;
 
 pub use d2::{
     load_image, load_image_channel, run_phantom, run_segment, save_overlay_png, segment_image,

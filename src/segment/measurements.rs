@@ -143,7 +143,7 @@ impl Measurements {
                 count_measure: count[p] as f64 * voxel,
                 mesh_measure: None,
                 mean: mean[p].map(|m| map.original(m)),
-                std: mean[p].map(|_| map.scale.abs() * (sq[p] / count[p] as f64).sqrt()),
+                std: mean[p].map(|_| map.scale().abs() * (sq[p] / count[p] as f64).sqrt()),
                 components: components[p],
             })
             .collect();

@@ -16,6 +16,7 @@ mod measures;
 mod physical;
 mod prop2d;
 mod reseed;
+mod report_units;
 mod seg3d;
 mod segment2d;
 mod sizing;
