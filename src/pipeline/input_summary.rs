@@ -78,10 +78,7 @@ impl InputSummary {
                 .iter()
                 .map(|m| m.map(|m| to_file.original(m)))
                 .collect(),
-            phase_means_normalised: ordered_means
-                .iter()
-                .map(|m| m.map(to_normalised))
-                .collect(),
+            phase_means_normalised: ordered_means.iter().map(|m| m.map(to_normalised)).collect(),
             loaded_unit,
         }
     }

@@ -68,17 +68,17 @@ fn a_float_tiff_reports_its_means_in_its_own_units_and_says_so() {
     let d = tmp();
     let path = d.path().join("f.tif");
     save_f32_tiff(&path, 32, &square(32, 0.0, 1000.0, 20.0));
-    let r = report(
-        &["segment".as_ref(), path.as_os_str()],
-        &d.path().join("o"),
-    );
+    let r = report(&["segment".as_ref(), path.as_os_str()], &d.path().join("o"));
     let input = &r["input"];
     assert_eq!(input["sample_type"], "float");
     assert_eq!(input["intensity_unit"], "file");
     assert_eq!(input["loaded_unit"], "file");
     assert_eq!(r["phases"]["intensity_unit"], "file");
     let means = floats(&input["phase_means"]);
-    assert!(means[0].abs() < 20.0 && (means[1] - 1000.0).abs() < 20.0, "{means:?}");
+    assert!(
+        means[0].abs() < 20.0 && (means[1] - 1000.0).abs() < 20.0,
+        "{means:?}"
+    );
     let phase_means: Vec<f64> = r["phases"]["phases"]
         .as_array()
         .unwrap()
@@ -87,7 +87,10 @@ fn a_float_tiff_reports_its_means_in_its_own_units_and_says_so() {
         .collect();
     assert_eq!(phase_means, means);
     let normalised = floats(&input["phase_means_normalised"]);
-    assert!(normalised[0] < 0.05 && normalised[1] > 0.95, "{normalised:?}");
+    assert!(
+        normalised[0] < 0.05 && normalised[1] > 0.95,
+        "{normalised:?}"
+    );
 }
 
 /// A folder of 16-bit PNG slices is a volume in the slices' units (its
@@ -99,7 +102,11 @@ fn a_folder_of_16_bit_slices_reports_its_means_in_its_own_units() {
     std::fs::create_dir(&dir).unwrap();
     let n = 16;
     for z in 0..n {
-        let inside = if (4..12).contains(&z) { 30_000.0 } else { 10_000.0 };
+        let inside = if (4..12).contains(&z) {
+            30_000.0
+        } else {
+            10_000.0
+        };
         save_u16_png(
             &dir.join(format!("s{z:02}.png")),
             n,
@@ -148,10 +155,7 @@ fn a_16_bit_image_reports_its_exact_range() {
     let d = tmp();
     let path = d.path().join("i.png");
     save_u16_png(&path, 32, &square(32, 1000.0, 1234.0, 0.0));
-    let r = report(
-        &["segment".as_ref(), path.as_os_str()],
-        &d.path().join("o"),
-    );
+    let r = report(&["segment".as_ref(), path.as_os_str()], &d.path().join("o"));
     assert_eq!(r["input"]["min"].as_f64(), Some(1000.0));
     assert_eq!(r["input"]["max"].as_f64(), Some(1234.0));
 }
