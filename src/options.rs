@@ -229,8 +229,9 @@ impl SegmentOptions {
 /// The options of a 3D segmentation (everything but the input and outputs).
 #[derive(Args, Clone, Debug)]
 pub struct Segment3dOptions {
-    /// Number of phases N, 2..=64 [default: the phantom's number without VOLUME, else 2].
-    #[arg(long, allow_hyphen_values = true)]
+    /// Number of phases N, 2..=64 [default: the phantom's number without
+    /// VOLUME, else 2]. (`auto` is for 2D images only.)
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_phases_3d)]
     pub phases: Option<i64>,
     /// Average edge length L of the mesh in the volume's length unit (voxels without a voxel
     /// size) [default: smallest side/64·sqrt(N-1) clamped to 3..10 voxel-sized steps].
@@ -380,6 +381,19 @@ fn parse_phases(s: &str) -> std::result::Result<PhaseCount, String> {
         .parse::<i64>()
         .map(PhaseCount::Count)
         .map_err(|_| format!("{s:?} is neither a number of phases nor auto"))
+}
+
+/// A `segment3d --phases` value: a count (the choice from the data,
+/// `auto`, is for 2D images only).
+fn parse_phases_3d(s: &str) -> std::result::Result<i64, String> {
+    match parse_phases(s)? {
+        PhaseCount::Count(n) => Ok(n),
+        PhaseCount::Auto => Err(
+            "auto chooses the number of phases of 2D images only (`dsc-seg segment`); \
+             give segment3d a number"
+                .into(),
+        ),
+    }
 }
 
 /// The number of phases, `default` when not given.

@@ -169,14 +169,32 @@ fn is_batch(inputs: &[PathBuf], three_d: bool) -> bool {
     inputs.len() > 1 || inputs.iter().any(|p| is_batch_folder(p, three_d))
 }
 
-fn segment(a: SegmentArgs) -> Result<(), Error> {
-    let outputs = Outputs::parse(&a.batch.outputs, false)?;
+/// How a command failed: an option that does not parse or fit (exit 2, as
+/// clap's own usage errors) or the run itself (exit 1).
+enum Failure {
+    Options(Error),
+    Run(Error),
+}
+
+impl From<Error> for Failure {
+    fn from(e: Error) -> Self {
+        Failure::Run(e)
+    }
+}
+
+/// An option's value, or the usage failure it is.
+fn option<T>(value: Result<T, Error>) -> Result<T, Failure> {
+    value.map_err(Failure::Options)
+}
+
+fn segment(a: SegmentArgs) -> Result<(), Failure> {
+    let outputs = option(Outputs::parse(&a.batch.outputs, false))?;
     if is_batch(&a.images, false) {
         let task = Task::Image {
-            params: a.options.params(2)?,
+            params: option(a.options.params(2))?,
             init_labels: a.options.init_labels.clone(),
             channel: a.options.channel,
-            spacing: a.options.spacing()?,
+            spacing: option(a.options.spacing())?,
         };
         return run_batch(&a.images, task, a.out, outputs, &a.batch, a.quiet);
     }
@@ -184,7 +202,8 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
         Some(p) => (Source::File(p.clone()), 2),
         None => {
             let kind = dsc_seg::phantom::Phantom2Kind::from_name(&a.phantom)
-                .ok_or_else(|| Error::Usage(format!("unknown phantom {:?}", a.phantom)))?;
+                .ok_or_else(|| Error::Usage(format!("unknown phantom {:?}", a.phantom)))
+                .map_err(Failure::Options)?;
             (
                 Source::Phantom {
                     name: kind.name().to_string(),
@@ -196,11 +215,11 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
             )
         }
     };
-    let spacing = a.options.spacing()?;
+    let spacing = option(a.options.spacing())?;
     let job = SegmentJob {
         source,
         out: a.out,
-        params: a.options.params(default_phases)?,
+        params: option(a.options.params(default_phases))?,
         init_labels: a.options.init_labels,
         outputs,
         quiet: a.quiet,
@@ -216,14 +235,14 @@ fn segment(a: SegmentArgs) -> Result<(), Error> {
     Ok(())
 }
 
-fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
-    let outputs = Outputs::parse(&a.batch.outputs, true)?;
+fn segment3d(a: Segment3dArgs) -> Result<(), Failure> {
+    let outputs = option(Outputs::parse(&a.batch.outputs, true))?;
     if is_batch(&a.volumes, true) {
         let task = Task::Volume {
-            params: a.options.params(2)?,
+            params: option(a.options.params(2))?,
             init_labels: a.options.init_labels.clone(),
             init_surface: a.options.init_surface.clone(),
-            spacing: a.options.spacing()?,
+            spacing: option(a.options.spacing())?,
         };
         return run_batch(&a.volumes, task, a.out, outputs, &a.batch, a.quiet);
     }
@@ -241,11 +260,11 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Error> {
                 .map_or(2, dsc_seg::phantom::Phantom3Kind::phases),
         ),
     };
-    let spacing = a.options.spacing()?;
+    let spacing = option(a.options.spacing())?;
     let job = Segment3dJob {
         source,
         out: a.out,
-        params: a.options.params(default_phases)?,
+        params: option(a.options.params(default_phases))?,
         init_labels: a.options.init_labels,
         init_surface: a.options.init_surface,
         outputs,
@@ -269,9 +288,13 @@ fn run_batch(
     outputs: Outputs,
     args: &BatchArgs,
     quiet: bool,
-) -> Result<(), Error> {
+) -> Result<(), Failure> {
     let jobs = match args.jobs {
-        Some(0) => return Err(Error::Usage("--jobs 0: at least one job".into())),
+        Some(0) => {
+            return Err(Failure::Options(Error::Usage(
+                "--jobs 0: at least one job".into(),
+            )))
+        }
         Some(n) => n,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
@@ -296,11 +319,11 @@ fn run_batch(
         );
     }
     if failed > 0 {
-        return Err(Error::Usage(format!(
+        return Err(Failure::Run(Error::Usage(format!(
             "{failed} of {} inputs failed (see {})",
             outcome.rows.len(),
             outcome.summary.display()
-        )));
+        ))));
     }
     Ok(())
 }
@@ -375,26 +398,27 @@ fn main() -> ExitCode {
     exit_cleanly_on_interrupt();
     let result = match cli.command {
         Command::Segment(a) => segment(a),
-        Command::Phantom(a) => run_phantom(&a.name, a.size, a.noise, a.seed, &a.out).map(|names| {
-            for n in names {
-                println!("{}", a.out.join(n).display());
-            }
-        }),
-        Command::Segment3d(a) => segment3d(a),
-        Command::Phantom3d(a) => {
-            run_phantom3d(&a.name, a.size, a.noise, a.seed, &a.out).map(|names| {
+        Command::Phantom(a) => run_phantom(&a.name, a.size, a.noise, a.seed, &a.out)
+            .map(|names| {
                 for n in names {
                     println!("{}", a.out.join(n).display());
                 }
             })
-        }
+            .map_err(Failure::Run),
+        Command::Segment3d(a) => segment3d(a),
+        Command::Phantom3d(a) => run_phantom3d(&a.name, a.size, a.noise, a.seed, &a.out)
+            .map(|names| {
+                for n in names {
+                    println!("{}", a.out.join(n).display());
+                }
+            })
+            .map_err(Failure::Run),
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            let msg = e.to_string().replace('\n', " ");
-            eprintln!("error: {msg}");
-            ExitCode::FAILURE
-        }
-    }
+    let (e, code) = match result {
+        Ok(()) => return ExitCode::SUCCESS,
+        Err(Failure::Options(e)) => (e, 2),
+        Err(Failure::Run(e)) => (e, 1),
+    };
+    eprintln!("error: {}", e.to_string().replace('\n', " "));
+    ExitCode::from(code)
 }

@@ -74,6 +74,22 @@ pub enum IoError {
         /// What is wrong with it.
         reason: String,
     },
+    /// A folder read as a volume's slices holds no image file.
+    #[error("{path}: the folder holds no slices (no file ending in {extensions})")]
+    NoSlices {
+        /// The folder.
+        path: PathBuf,
+        /// The extensions read as slices.
+        extensions: String,
+    },
+    /// An image with NaN or infinite samples: no intensity is known there.
+    #[error("{path}: {samples}")]
+    NonFinite {
+        /// The offending path.
+        path: PathBuf,
+        /// How many samples are not finite, of how many.
+        samples: super::volume::NonFiniteSamples,
+    },
     /// A file or directory whose kind we cannot guess (e.g. an unknown extension
     /// for a volume).
     #[error("{path}: unknown file type: {reason}")]

@@ -133,9 +133,31 @@ impl Image2 {
     /// the `image` crate refuses (32-bit float as Fiji writes them, signed
     /// or 32-bit integers) are read with the `tiff` crate, first page only.
     ///
-    /// Corrupt or truncated files give an error, never a panic.
+    /// Corrupt or truncated files give an error, never a panic; so does a
+    /// NaN or infinite sample (with the count of such samples), as for volumes.
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
+        Self::decode(path)?.refuse_non_finite(path)
+    }
+
+    /// `self`, or the error naming `path` and the count of its samples that
+    /// are NaN or infinite.
+    fn refuse_non_finite(self, path: &Path) -> Result<Self> {
+        let count = self.data.iter().filter(|v| !v.is_finite()).count();
+        if count == 0 {
+            return Ok(self);
+        }
+        Err(IoError::NonFinite {
+            path: path.to_path_buf(),
+            samples: super::volume::NonFiniteSamples {
+                count,
+                total: self.data.len(),
+            },
+        })
+    }
+
+    /// [`load`](Self::load) without the check of the samples.
+    fn decode(path: &Path) -> Result<Self> {
         let reader = ImageReader::open(path)
             .map_err(|e| IoError::unreadable(path, e))?
             .with_guessed_format()
@@ -220,6 +242,12 @@ impl Image2 {
         let Some(k) = channel else {
             return Self::load(path);
         };
+        Self::decode_channel(path, k)?.refuse_non_finite(path)
+    }
+
+    /// [`load_channel`](Self::load_channel) of channel `k`, without the
+    /// check of the samples.
+    fn decode_channel(path: &Path, k: usize) -> Result<Self> {
         let reader = ImageReader::open(path)
             .map_err(|e| IoError::unreadable(path, e))?
             .with_guessed_format()

@@ -344,7 +344,10 @@ impl Volume {
             }
         }
         if files.is_empty() {
-            return Err(IoError::empty(dir, &[0, 0, 0]));
+            return Err(IoError::NoSlices {
+                path: dir.to_path_buf(),
+                extensions: EXTS.join(", "),
+            });
         }
         files.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
         let mut data = Vec::new();
@@ -674,6 +677,14 @@ fn parse_nifti(path: &Path, b: &[u8]) -> Result<Volume> {
     ) {
         (348, _) => true,
         (_, 348) => false,
+        (540, _) | (_, 540) => {
+            return Err(IoError::Unsupported {
+                path: path.to_path_buf(),
+                reason: "NIfTI-2 (540-byte header) is not supported; save the volume as \
+                         NIfTI-1 (e.g. nibabel's Nifti1Image, or FSL's fslchfiletype NIFTI_GZ)"
+                    .into(),
+            })
+        }
         (v, _) => return Err(bad(format!("sizeof_hdr is {v}, expected 348"))),
     };
     let i16_at = |o: usize| {

@@ -2,7 +2,7 @@
 //! segmented with the triangle DSC into `labels.png`, overlays, `mesh.vtu`
 //! and `report.json`.
 
-use super::input_summary::InputSummary;
+use super::input_summary::{with_file_values, InputSummary};
 use super::{
     add_frame_and_phases, check_label_range, check_phantom, mean_dice, run_with_progress,
     GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
@@ -297,17 +297,23 @@ pub(crate) fn segment_image_then<T>(
     let view = ImageView::new_2d(w, h, image.data())
         .ok_or_else(|| Error::Usage("image buffer does not match its size".into()))?;
     let t_seg = Instant::now();
+    let intensity = match &provenance.source {
+        Source::File(_) => Some(IntensityMap::of_sample_type(image.sample_type())),
+        _ => None,
+    };
+    let file_values = |e| with_file_values(e, intensity, image.sample_type());
     let mut params = params;
     let phase_choice = match params.auto_phases {
         Some(max) => {
             params.validate(w, h)?;
-            let choice = choose_phases::<D2>(view, max, |n| params.with_phases(n))?;
+            let choice = choose_phases::<D2>(view, max, |n| params.with_phases(n))
+                .map_err(file_values)?;
             params = params.with_phases(choice.phases);
             Some(choice)
         }
         None => None,
     };
-    let mut seg = Segmentation::<D2>::new(view, params.clone())?;
+    let mut seg = Segmentation::<D2>::new(view, params.clone()).map_err(file_values)?;
     let ready = ready()?;
 
     let mut report = run_with_progress(&mut seg, params.max_iterations, quiet);
@@ -335,10 +341,6 @@ pub(crate) fn segment_image_then<T>(
         times,
         truth_dice,
     );
-    let intensity = match &provenance.source {
-        Source::File(_) => Some(IntensityMap::of_sample_type(image.sample_type())),
-        _ => None,
-    };
     let input = InputSummary::new(
         (image.sample_type(), image.colour()),
         intensity,

@@ -3,7 +3,7 @@
 //! `mesh.vtu`, `interface.vtp` and `report.json` through the same staged,
 //! all-or-nothing output directory as the 2D job.
 
-use super::input_summary::InputSummary;
+use super::input_summary::{with_file_values, InputSummary};
 use super::{
     add_frame_and_phases, check_label_range, check_phantom, mean_dice, run_with_progress,
     GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
@@ -266,7 +266,9 @@ pub(crate) fn segment_volume_then<T>(
         })?;
     let t_seg = Instant::now();
     let mut seg = match init_surface {
-        None => Segmentation::<D3>::new(view, params.clone())?,
+        None => Segmentation::<D3>::new(view, params.clone()).map_err(|e| {
+            with_file_values(e, volume.intensity(), volume.sample_type())
+        })?,
         Some(path) => surface_segmentation(view, params.clone(), path)?,
     };
     let ready = ready()?;

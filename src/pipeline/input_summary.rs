@@ -5,7 +5,7 @@
 
 use crate::io::intensity::IntensityMap;
 use crate::io::{Colour, SampleType};
-use crate::segment::SegmentReport;
+use crate::segment::{SegmentError, SegmentReport};
 use serde::Serialize;
 
 /// Intensities as the file holds them (8/16-bit integers as stored, floats
@@ -81,5 +81,20 @@ impl InputSummary {
             phase_means_normalised: ordered_means.iter().map(|m| m.map(to_normalised)).collect(),
             loaded_unit,
         }
+    }
+}
+
+/// `error` with a constant image's value in the file's units (the
+/// segmentation sees the loaded values: 0.5 for a 16-bit image of 32768s).
+pub(crate) fn with_file_values(
+    error: SegmentError,
+    map: Option<IntensityMap>,
+    sample_type: SampleType,
+) -> SegmentError {
+    match (error, map) {
+        (SegmentError::ConstantImage(v), Some(map)) => {
+            SegmentError::ConstantImage(map.original_sample(v, sample_type))
+        }
+        (error, _) => error,
     }
 }

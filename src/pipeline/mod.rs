@@ -169,6 +169,9 @@ pub(crate) struct RunReport<'a> {
     phase_order: Vec<u8>,
     /// The final means by rank, i.e. of output values 0, 1, ...
     ordered_means: Vec<Option<f64>>,
+    /// Every warning of the run (lost phases, the iteration cap, the
+    /// choice of `--phases auto`), as printed on stderr; empty when all is well.
+    warnings: &'a [String],
     iterations: usize,
     converged: bool,
     final_means: &'a [Option<f64>],
@@ -206,6 +209,7 @@ impl<'a> RunReport<'a> {
             dsc: seg.dsc_params(),
             phase_order: order,
             ordered_means,
+            warnings: &report.warnings,
             iterations: report.iterations,
             converged: report.converged,
             final_means: &report.final_means,

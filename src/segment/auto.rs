@@ -49,8 +49,13 @@ pub struct PhaseTrial {
     pub phases: usize,
     /// Whether every phase of the result is real.
     pub accepted: bool,
-    /// Why not, when not.
+    /// Why not, when not (`None` exactly when accepted). Two phases are
+    /// kept even when not accepted, as the fewest there are: the choice's
+    /// warnings say so.
     pub reason: Option<String>,
+    /// Whether the run converged before the iteration cap (a run stopped
+    /// at the cap is judged as it stood, and the choice warns).
+    pub converged: bool,
     /// Thickness of the thinnest phase, in pixels.
     pub thinnest: f64,
     /// Data term `Σ (I − m)²` of the result.
@@ -78,7 +83,27 @@ impl PhaseChoice {
         self.cap_warning()
             .into_iter()
             .chain(self.floor_warning())
+            .chain(self.unconverged_warning())
             .collect()
+    }
+
+    /// A warning when a trial the choice rests on (a count up to the chosen
+    /// one) stopped at the iteration cap: its phases were judged before the
+    /// run converged, so the choice may not be the data's.
+    pub fn unconverged_warning(&self) -> Option<String> {
+        let counts: Vec<String> = self
+            .trials
+            .iter()
+            .filter(|t| t.phases <= self.phases && !t.converged)
+            .map(|t| t.phases.to_string())
+            .collect();
+        (!counts.is_empty()).then(|| {
+            format!(
+                "--phases auto judged the run with {} phases at the iteration cap, before it \
+                 converged: the choice may change with a higher --max-iterations",
+                counts.join(", ")
+            )
+        })
     }
 
     /// A warning when two phases, the fewest there are, failed the tests of
@@ -101,10 +126,11 @@ impl PhaseChoice {
     /// (a ramp or shading passes every test of a region at every count).
     pub fn cap_warning(&self) -> Option<String> {
         let last = self.trials.last()?;
-        (last.accepted && last.phases == self.max_phases && self.max_phases > 2).then(|| {
+        (last.accepted && last.phases == self.max_phases).then(|| {
             format!(
                 "--phases auto took the largest count tried ({}): the image may hold more \
-                 phases, or vary smoothly rather than in regions; give --max-phases or --phases",
+                 phases, or vary smoothly rather than in regions; a larger --max-phases tries \
+                 more (--phases N fixes the count)",
                 self.max_phases
             )
         })
@@ -140,16 +166,19 @@ pub fn choose_phases<K: Raster>(
         } else {
             shared_plateau(&seg.label_image(), image, n, seg.duplicate_tolerance())
         };
-        let accepted = reason.is_none() || n == 2;
+        let accepted = reason.is_none();
+        // Two phases are the fewest: kept even when not accepted.
+        let kept = accepted || n == 2;
         trials.push(PhaseTrial {
             phases: n,
             accepted,
             reason,
+            converged: report.converged,
             thinnest,
             data_energy: report.history.last().map_or(f64::NAN, |r| r.data_energy),
             iterations: report.iterations,
         });
-        if !accepted {
+        if !kept {
             break;
         }
         chosen = n;

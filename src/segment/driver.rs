@@ -76,6 +76,16 @@ pub enum StopReason {
     Stopped,
 }
 
+/// The warning of a run that reached the iteration cap before its stopping
+/// rule: its interfaces may still have been moving, so the result may not
+/// be the segmentation the method converges to.
+pub fn cap_warning(max_iterations: usize) -> String {
+    format!(
+        "the run stopped at the iteration cap ({max_iterations} iterations) before converging: \
+         the interfaces may still be moving; --max-iterations raises the cap"
+    )
+}
+
 /// A segmentation split into disjoint borrows: the state the models read
 /// and the parts they, or the force stage, change.
 struct Parts<'s, 'a, K: Raster> {
@@ -1039,8 +1049,15 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let final_energy = self.data_energy() + self.nu * self.interface_measure();
         self.times.total = self.times.setup + t0.elapsed().as_secs_f64();
         let converged = self.converged();
+        let stop_reason = if converged {
+            StopReason::Converged
+        } else if stopped {
+            StopReason::Stopped
+        } else {
+            StopReason::MaxIterations
+        };
         let order = self.phase_order();
-        let warnings: Vec<String> = self
+        let mut warnings: Vec<String> = self
             .lost_phases()
             .iter()
             .map(|l| {
@@ -1051,17 +1068,14 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 )
             })
             .collect();
+        if stop_reason == StopReason::MaxIterations {
+            warnings.push(cap_warning(self.params.max_iterations));
+        }
         SegmentReport {
             edge_length: self.dsc.edge_length,
             iterations: self.history.len(),
             converged,
-            stop_reason: if converged {
-                StopReason::Converged
-            } else if stopped {
-                StopReason::Stopped
-            } else {
-                StopReason::MaxIterations
-            },
+            stop_reason,
             final_means: self.phases.mean.clone(),
             final_energy,
             length_weight_abs: self.nu,

@@ -17,7 +17,7 @@ pub enum SegmentError {
     #[error("the image contains a non-finite value")]
     NonFinite,
     /// All pixels have the same value: there is nothing to separate.
-    #[error("the image is constant ({0:.4}); there is nothing to segment")]
+    #[error("the image is constant (every sample is {0}); there is nothing to segment")]
     ConstantImage(f64),
     /// Fewer distinct intensities than phases.
     #[error("the image has only {distinct} distinct intensities, fewer than the {phases} phases asked for")]

@@ -64,7 +64,7 @@ impl LostPhase {
         let phase = |l: Label| order.get(l as usize).map_or(l, |&p| Label::from(p));
         match *self {
             LostPhase::Empty(l) => format!(
-                "phase {} covers no pixel (labels.png has no value {0})",
+                "phase {} covers no pixel or voxel (the label image has no value {0})",
                 phase(l)
             ),
             LostPhase::Duplicate { phase: a, twin: b } => {
@@ -243,6 +243,14 @@ fn most_structured_split<K: Raster>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The message is the same in 2D and 3D: it must not name a 2D output.
+    #[test]
+    fn an_empty_phase_is_described_without_naming_a_2d_file() {
+        let text = LostPhase::Empty(1).describe(&[0, 1]);
+        assert!(text.contains("phase 1 covers no pixel or voxel"), "{text}");
+        assert!(!text.contains("labels.png"), "{text}");
+    }
 
     fn stats(count: &[u64], mean: &[f64]) -> PhaseStats {
         PhaseStats {

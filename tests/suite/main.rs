@@ -13,6 +13,7 @@ mod forces;
 mod generic;
 mod intensity;
 mod measures;
+mod messages;
 mod physical;
 mod prop2d;
 mod report_units;

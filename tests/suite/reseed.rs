@@ -125,6 +125,9 @@ fn a_choice_at_the_floor_says_so() {
     assert_eq!(choice.phases, 2, "{choice:?}");
     let warning = choice.floor_warning().expect("a warning at the floor");
     assert!(warning.contains("single phase"), "{warning}");
+    // The two phases are kept as the fewest, not passed off as accepted.
+    let first = &choice.trials[0];
+    assert!(!first.accepted && first.reason.is_some(), "{choice:?}");
 
     let mut disk: Vec<f32> = (0..n * n)
         .map(|i| {
@@ -200,5 +203,41 @@ fn a_thin_class_lost_as_a_band_is_reported() {
         dice > 0.7 || warned,
         "fat Dice {dice}, warnings {:?}",
         report.warnings
+    );
+}
+
+/// `--max-phases 2` on an image of two clear phases takes the cap: the
+/// choice says that more phases might fit and how to try them.
+#[test]
+fn a_choice_at_a_cap_of_two_says_so() {
+    use dsc_seg::dim::D2;
+    use dsc_seg::segment::auto::choose_phases;
+    let ph = Phantom2Kind::Disks(3).generate(96, 0.05, 1);
+    let view = ImageView::new_2d(ph.width, ph.height, &ph.image).unwrap();
+    let choice = choose_phases::<D2>(view, 2, SegmentParams::new).unwrap();
+    assert_eq!(choice.phases, 2, "{choice:?}");
+    assert!(choice.trials[0].accepted, "{choice:?}");
+    let warning = choice.cap_warning().expect("a warning at the cap");
+    assert!(warning.contains("--max-phases"), "{warning}");
+}
+
+/// A trial stopped at the iteration cap is not judged silently.
+#[test]
+fn a_trial_at_the_iteration_cap_is_warned_of() {
+    use dsc_seg::dim::D2;
+    use dsc_seg::segment::auto::choose_phases;
+    let ph = Phantom2Kind::Disks(2).generate(96, 0.1, 1);
+    let view = ImageView::new_2d(ph.width, ph.height, &ph.image).unwrap();
+    let params = |k| {
+        let mut p = SegmentParams::new(k);
+        p.max_iterations = 2;
+        p
+    };
+    let choice = choose_phases::<D2>(view, 3, params).unwrap();
+    assert!(!choice.trials[0].converged, "{choice:?}");
+    let warnings = choice.warnings();
+    assert!(
+        warnings.iter().any(|w| w.contains("--max-iterations")),
+        "{warnings:?}"
     );
 }

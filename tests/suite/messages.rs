@@ -1,0 +1,141 @@
+//! What the command line tells a user: warnings on stderr and in
+//! `report.json`'s top-level `warnings`, errors that name the file and say
+//! what is wrong in the file's terms, and the exit codes of the README (2
+//! for options that do not parse or fit, 1 for a failed run).
+
+use crate::cli::{bin, tmp};
+use std::path::Path;
+use std::process::Output;
+
+fn run(args: &[&str], out: &Path) -> Output {
+    bin()
+        .args(args)
+        .args(["--quiet", "--out"])
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A run stopped at the iteration cap says so on stderr and in the report,
+/// naming the option that raises the cap.
+#[test]
+fn a_run_at_the_iteration_cap_warns() {
+    let d = tmp();
+    let out = d.path().join("o");
+    let args = [
+        "segment",
+        "--phantom-size",
+        "64",
+        "--max-iterations",
+        "2",
+        "--outputs",
+        "report",
+    ];
+    let o = run(&args, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("warning: the run stopped at the iteration cap (2 iterations)"),
+        "{}",
+        stderr(&o)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["converged"], false);
+    let warnings = report["warnings"].as_array().expect("top-level warnings");
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("--max-iterations")),
+        "{warnings:?}"
+    );
+}
+
+/// A constant image's error gives the value as the file stores it (not
+/// the loaded 1000/65535).
+#[test]
+fn a_constant_image_is_named_by_its_file_value() {
+    let d = tmp();
+    let path = d.path().join("c.png");
+    image::ImageBuffer::<image::Luma<u16>, _>::from_raw(16, 16, vec![1000u16; 256])
+        .unwrap()
+        .save(&path)
+        .unwrap();
+    let o = run(&["segment", path.to_str().unwrap()], &d.path().join("o"));
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("every sample is 1000)"), "{}", stderr(&o));
+}
+
+/// A 2D image with NaN samples is refused with its name and their count,
+/// as a volume is.
+#[test]
+fn a_2d_image_with_nan_names_the_file_and_the_count() {
+    let d = tmp();
+    let path = d.path().join("nan.tif");
+    let mut data = vec![0.0f32; 256];
+    data[..128].fill(1.0);
+    data[3] = f32::NAN;
+    data[200] = f32::INFINITY;
+    tiff::encoder::TiffEncoder::new(std::fs::File::create(&path).unwrap())
+        .unwrap()
+        .write_image::<tiff::encoder::colortype::Gray32Float>(16, 16, &data)
+        .unwrap();
+    let o = run(&["segment", path.to_str().unwrap()], &d.path().join("o"));
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("nan.tif") && e.contains("2 of 256 samples"), "{e}");
+}
+
+/// A NIfTI-2 file is refused as unsupported, not as malformed.
+#[test]
+fn a_nifti_2_file_is_named_as_such() {
+    let d = tmp();
+    let path = d.path().join("v.nii");
+    let mut header = vec![0u8; 600];
+    header[..4].copy_from_slice(&540i32.to_le_bytes());
+    std::fs::write(&path, header).unwrap();
+    let o = run(&["segment3d", path.to_str().unwrap()], &d.path().join("o"));
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("NIfTI-2") && !e.contains("malformed"), "{e}");
+}
+
+/// A folder without slices says so, not "empty image (0x0x0)".
+#[test]
+fn a_folder_without_slices_says_so() {
+    let d = tmp();
+    let dir = d.path().join("slices");
+    std::fs::create_dir(&dir).unwrap();
+    std::fs::write(dir.join("notes.txt"), "not a slice").unwrap();
+    let o = run(&["segment3d", dir.to_str().unwrap()], &d.path().join("o"));
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("holds no slices"), "{}", stderr(&o));
+}
+
+/// `segment3d --phases auto` is a usage error that says auto is for 2D.
+#[test]
+fn phases_auto_in_3d_is_a_usage_error_that_says_why() {
+    let d = tmp();
+    let o = run(&["segment3d", "--phases", "auto"], &d.path().join("o"));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("2D images only"), "{}", stderr(&o));
+}
+
+/// An output list that does not parse exits 2, as the README says of
+/// options that do not parse; so does a bad value checked after parsing.
+#[test]
+fn bad_option_values_exit_2() {
+    let d = tmp();
+    for args in [
+        &["segment", "--outputs", "foo"][..],
+        &["segment3d", "--outputs", "overlay"][..],
+        &["segment", "--phases", "99"][..],
+    ] {
+        let o = run(args, &d.path().join("o"));
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(!d.path().join("o").exists(), "{args:?} created --out");
+    }
+}
