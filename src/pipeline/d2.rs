@@ -306,8 +306,8 @@ pub(crate) fn segment_image_then<T>(
     let phase_choice = match params.auto_phases {
         Some(max) => {
             params.validate(w, h)?;
-            let choice = choose_phases::<D2>(view, max, |n| params.with_phases(n))
-                .map_err(file_values)?;
+            let choice =
+                choose_phases::<D2>(view, max, |n| params.with_phases(n)).map_err(file_values)?;
             params = params.with_phases(choice.phases);
             Some(choice)
         }

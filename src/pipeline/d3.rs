@@ -266,9 +266,8 @@ pub(crate) fn segment_volume_then<T>(
         })?;
     let t_seg = Instant::now();
     let mut seg = match init_surface {
-        None => Segmentation::<D3>::new(view, params.clone()).map_err(|e| {
-            with_file_values(e, volume.intensity(), volume.sample_type())
-        })?,
+        None => Segmentation::<D3>::new(view, params.clone())
+            .map_err(|e| with_file_values(e, volume.intensity(), volume.sample_type()))?,
         Some(path) => surface_segmentation(view, params.clone(), path)?,
     };
     let ready = ready()?;

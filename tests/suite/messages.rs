@@ -66,7 +66,11 @@ fn a_constant_image_is_named_by_its_file_value() {
         .unwrap();
     let o = run(&["segment", path.to_str().unwrap()], &d.path().join("o"));
     assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("every sample is 1000)"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("every sample is 1000)"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// A 2D image with NaN samples is refused with its name and their count,
@@ -86,7 +90,10 @@ fn a_2d_image_with_nan_names_the_file_and_the_count() {
     let o = run(&["segment", path.to_str().unwrap()], &d.path().join("o"));
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
-    assert!(e.contains("nan.tif") && e.contains("2 of 256 samples"), "{e}");
+    assert!(
+        e.contains("nan.tif") && e.contains("2 of 256 samples"),
+        "{e}"
+    );
 }
 
 /// A NIfTI-2 file is refused as unsupported, not as malformed.
