@@ -110,18 +110,6 @@ fn a_nifti_2_file_is_named_as_such() {
     assert!(e.contains("NIfTI-2") && !e.contains("malformed"), "{e}");
 }
 
-/// A folder without slices says so, not "empty image (0x0x0)".
-#[test]
-fn a_folder_without_slices_says_so() {
-    let d = tmp();
-    let dir = d.path().join("slices");
-    std::fs::create_dir(&dir).unwrap();
-    std::fs::write(dir.join("notes.txt"), "not a slice").unwrap();
-    let o = run(&["segment3d", dir.to_str().unwrap()], &d.path().join("o"));
-    assert_eq!(o.status.code(), Some(1));
-    assert!(stderr(&o).contains("holds no slices"), "{}", stderr(&o));
-}
-
 /// `segment3d --phases auto` is a usage error that says auto is for 2D.
 #[test]
 fn phases_auto_in_3d_is_a_usage_error_that_says_why() {
