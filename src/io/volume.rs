@@ -1575,7 +1575,7 @@ mod tests {
         let empty = tempfile::tempdir().unwrap();
         assert!(matches!(
             Volume::load(empty.path()),
-            Err(IoError::Empty { .. })
+            Err(IoError::NoSlices { .. })
         ));
         assert!(matches!(
             Volume::load(dir.path().join("x.raw")),
