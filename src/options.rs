@@ -41,6 +41,12 @@ pub struct EvolutionArgs {
     /// [default: 0 in 2D, 0.02 in 3D].
     #[arg(long, allow_hyphen_values = true)]
     pub min_move: Option<f64>,
+    /// A flip round that relabels fewer than this fraction of the cells is
+    /// quiet: it does not restart the energy plateau of the stopping rule,
+    /// and one that comes on a plateau half as long ends the run (0: every
+    /// round counts) [default: 0 in 2D, 0.01 in 3D].
+    #[arg(long, value_name = "F")]
+    pub quiet_round_fraction: Option<f64>,
     /// Triple-junction force of eq. (7): `edge-local` (the default: each
     /// sample bracketed by its own edge's phases) or `paper` (literal: the
     /// junction's phases bracket every sample; grows wedges on blurred edges).
@@ -88,6 +94,7 @@ impl EvolutionArgs {
         set(&mut p.elasticity, self.elasticity);
         set(&mut p.step_fraction, self.step_fraction);
         set(&mut p.min_move, self.min_move);
+        set(&mut p.quiet_round_fraction, self.quiet_round_fraction);
         set(&mut p.length_weight, self.length_weight);
         p.flip_interval = self.flip_interval.unwrap_or(p.flip_interval);
         if self.adaptive || self.min_edge_length.is_some() || self.max_edge_length.is_some() {

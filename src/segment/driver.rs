@@ -258,6 +258,9 @@ pub struct Segmentation<'a, K: Raster> {
     /// Iterations since the energy last reached a new low (not reset when
     /// the step is halved): the plateau of [`SegmentParams::converge_plateau`].
     since_new_low: usize,
+    /// Whether a quiet flip round came on an energy plateau
+    /// ([`SegmentParams::quiet_round_fraction`]): the run has converged.
+    quiet_round_on_plateau: bool,
     /// Iterations of the fine finish still to run (`None`: not begun; see
     /// [`Finish`](super::adaptive::Finish)).
     finish_left: Option<usize>,
@@ -431,6 +434,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             best_energy: f64::INFINITY,
             stalled: 0,
             since_new_low: 0,
+            quiet_round_on_plateau: false,
             finish_left: None,
         };
         s.step = s.params.step_fraction;
@@ -639,13 +643,19 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 forces = Some(computed);
             }
         }
+        let cells_before_flips = self.complex.cell_count();
         let mut flips = 0;
         if flips_due && forces.is_none() {
             flips = self.relabel(iteration);
         }
-        if flips_due && self.recover_lost_phases() > 0 {
+        let reseeded = flips_due && self.recover_lost_phases() > 0;
+        if reseeded {
             forces = None;
         }
+        let quiet_round = flips_due
+            && iteration > 1
+            && !reseeded
+            && (flips as f64) < self.params.quiet_round_fraction * cells_before_flips as f64;
         // The record is of one state: the labels after the flips, whose
         // length term the forces measure below.
         let data_energy = self.data_energy();
@@ -685,10 +695,13 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 .as_ref()
                 .map(|_| self.complex.edge_length_summary()),
         };
+        if quiet_round {
+            self.judge_quiet_round(rec.energy);
+        }
         // Under noise a fixed step never lets every vertex settle: once the
         // energy has not reached a new low for `STALL_ITERATIONS`, halve the
         // step (down to 1/16 of the parameter).
-        if rec.energy < self.best_energy - 3e-4 * rec.energy.abs() {
+        if !quiet_round && rec.energy < self.best_energy - 3e-4 * rec.energy.abs() {
             self.best_energy = rec.energy;
             self.stalled = 0;
             self.since_new_low = 0;
@@ -708,6 +721,26 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.advance_finish();
         self.history.push(rec.clone());
         rec
+    }
+
+    /// A quiet flip round (fewer flips than
+    /// [`quiet_round_fraction`](SegmentParams::quiet_round_fraction) of the
+    /// cells) whose state has `energy`: the energy its flips took off does
+    /// not count as a new low, so the plateau goes on (the flips are noise
+    /// along settled interfaces, and counting them bought ten more
+    /// iterations per round), and the lower energy becomes the one to beat.
+    /// A quiet round that finds the energy on a plateau for half of
+    /// [`converge_plateau`](SegmentParams::converge_plateau) ends the run
+    /// on the state after it.
+    fn judge_quiet_round(&mut self, energy: f64) {
+        if self
+            .params
+            .converge_plateau
+            .is_some_and(|n| 2 * self.since_new_low >= n)
+        {
+            self.quiet_round_on_plateau = true;
+        }
+        self.best_energy = self.best_energy.min(energy);
     }
 
     /// Counts down the fine finish, or begins it once the stopping rule is
@@ -853,6 +886,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             self.best_energy = f64::INFINITY;
             self.stalled = 0;
             self.since_new_low = 0;
+            self.quiet_round_on_plateau = false;
             self.step = self.params.step_fraction;
         }
         self.times.flips += t.elapsed().as_secs_f64();
@@ -979,14 +1013,16 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
     }
 
-    /// Whether the stopping rule (displacement or energy plateau) is met.
+    /// Whether the stopping rule (displacement or energy plateau, or a quiet
+    /// flip round on a plateau) is met.
     fn stopping_rule_met(&self) -> bool {
+        let on_plateau = self
+            .params
+            .converge_plateau
+            .is_some_and(|n| self.since_new_low >= n)
+            || self.quiet_round_on_plateau;
         self.quiet_iterations >= self.params.converge_iterations
-            || (self
-                .params
-                .converge_plateau
-                .is_some_and(|n| self.since_new_low >= n)
-                && self.sizing_settled())
+            || (on_plateau && self.sizing_settled())
     }
 
     /// Whether the sizing field has settled, as far as the plateau rule is

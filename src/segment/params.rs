@@ -25,6 +25,10 @@ pub const CONVERGE_PIXELS: f64 = 0.05;
 /// (91 against 73) (`benches/RESULTS.md`, "Speed, 3D").
 pub const MIN_MOVE_3D: f64 = 0.02;
 
+/// The 3D default of [`SegmentParams::quiet_round_fraction`]: a flip round
+/// relabelling fewer than 1 % of the cells is quiet.
+pub const QUIET_ROUND_FRACTION_3D: f64 = 0.01;
+
 /// The 3D default of [`SegmentParams::step_fraction`] with three or more
 /// phases. On the 64³ and 128³ benchmark volumes of three and four phases
 /// (noise seeds 1 and 2) the Dice rose on 11 of 12 (by up to 0.0068; the
@@ -228,6 +232,17 @@ pub struct SegmentParams {
     /// [`new_3d`](Self::new_3d)).
     #[serde(default)]
     pub converge_plateau: Option<usize>,
+    /// A flip round (see [`flip_interval`](Self::flip_interval)) that
+    /// relabels fewer than this fraction of the cells is *quiet*: the
+    /// energy it lowers does not restart the plateau of
+    /// [`converge_plateau`](Self::converge_plateau), and one that comes when
+    /// the plateau has lasted half its length ends the run on the state
+    /// after the round. Such a round relabels noise-sized cells along
+    /// settled interfaces, and each one used to buy ten more iterations at
+    /// an unchanged Dice. 0 (2D, where flips run every iteration): every
+    /// round counts. 3D: [`QUIET_ROUND_FRACTION_3D`].
+    #[serde(default)]
+    pub quiet_round_fraction: f64,
     /// Whether layers of an intermediate phase as thin as the band a blurred
     /// edge leaves between two other phases are given back to those phases
     /// at each flip round ([`band_flips`](super::band_flips)). Off in 2D
@@ -288,6 +303,7 @@ impl SegmentParams {
             converge_pixels: Some(CONVERGE_PIXELS),
             converge_iterations: 5,
             converge_plateau: None,
+            quiet_round_fraction: 0.0,
             length_weight: if phases == 2 { 1.6 } else { 5.5 },
             sample_spacing: 1.0,
             sizing: SizingParams {
@@ -338,6 +354,7 @@ impl SegmentParams {
             },
             converge_pixels: None,
             converge_plateau: Some(PLATEAU_ITERATIONS),
+            quiet_round_fraction: QUIET_ROUND_FRACTION_3D,
             sizing: SizingParams {
                 adaptive: true,
                 coarse_start: true,
@@ -446,6 +463,12 @@ impl SegmentParams {
             self.converge_displacement,
             self.converge_displacement >= 0.0,
             non_negative,
+        )?;
+        check(
+            "quiet_round_fraction",
+            self.quiet_round_fraction,
+            (0.0..=1.0).contains(&self.quiet_round_fraction),
+            "must lie in [0, 1]",
         )?;
         if let Some(pixels) = self.converge_pixels {
             check("converge_pixels", pixels, pixels >= 0.0, non_negative)?;

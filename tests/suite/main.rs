@@ -21,3 +21,4 @@ mod reseed;
 mod seg3d;
 mod segment2d;
 mod sizing;
+mod stopping3d;
