@@ -405,11 +405,21 @@ fn bad_slice_folders() {
     let out = empty_out(&d);
     let empty = d.path().join("empty");
     std::fs::create_dir(&empty).unwrap();
-    fails(&SEGMENT3D, &[empty.to_str().unwrap()], &out, "holds no slices");
+    fails(
+        &SEGMENT3D,
+        &[empty.to_str().unwrap()],
+        &out,
+        "holds no slices",
+    );
     // Only files that are not slices: still empty.
     std::fs::write(empty.join("notes.txt"), "not a slice").unwrap();
     std::fs::write(empty.join(".hidden.png"), "hidden").unwrap();
-    fails(&SEGMENT3D, &[empty.to_str().unwrap()], &out, "holds no slices");
+    fails(
+        &SEGMENT3D,
+        &[empty.to_str().unwrap()],
+        &out,
+        "holds no slices",
+    );
 
     let mixed = d.path().join("mixed");
     std::fs::create_dir(&mixed).unwrap();
