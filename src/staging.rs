@@ -15,6 +15,11 @@ use std::sync::{Mutex, MutexGuard};
 /// for its renames, so an interruption never sees half a publication.
 static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
+/// The output directories this process created, in order: an interrupted
+/// run removes those it leaves empty, so that it leaves no trace where
+/// there was nothing. Locked only while [`LIVE`] is held.
+static CREATED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
 fn live() -> MutexGuard<'static, Vec<PathBuf>> {
     // A panicking holder cannot leave the list inconsistent: keep using it.
     LIVE.lock().unwrap_or_else(|e| e.into_inner())
@@ -41,8 +46,11 @@ impl Staging {
         if dir.exists() && !dir.is_dir() {
             return Err(err("it exists and is not a directory".into()));
         }
-        std::fs::create_dir_all(dir).map_err(|e| err(e.to_string()))?;
         let mut list = live();
+        if !dir.exists() {
+            std::fs::create_dir_all(dir).map_err(|e| err(e.to_string()))?;
+            created().push(dir.to_path_buf());
+        }
         let stage = tempfile::Builder::new()
             .prefix(STAGING_PREFIX)
             .tempdir_in(dir)
@@ -92,7 +100,16 @@ pub fn remove_all_and_hold() -> MutexGuard<'static, Vec<PathBuf>> {
     for dir in list.drain(..) {
         remove_while_written(&dir);
     }
+    // Newest first: a batch's per-input folders before the batch's own.
+    for dir in created().drain(..).rev() {
+        // Fails, leaving it, unless empty: finished outputs stay.
+        let _ = std::fs::remove_dir(&dir);
+    }
     list
+}
+
+fn created() -> MutexGuard<'static, Vec<PathBuf>> {
+    CREATED.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// Removes `dir` although another thread may still be writing an output into

@@ -23,9 +23,11 @@ struct Cli {
 enum Command {
     /// Segment images (or, without IMAGE, a built-in phantom) into N phases.
     ///
-    /// One image: writes labels.png (phase index 0..N-1 ordered by
-    /// increasing mean), overlay.png and overlay.svg, mesh.vtu (cell data
-    /// `phase`) and report.json into --out. Several images or a folder: the
+    /// One image: writes into --out labels.png (phase index 0..N-1 ordered
+    /// by increasing mean; a TIFF input also gets labels.tif), overlay.png
+    /// and overlay.svg, mesh.vtu (cell data `phase`), interface.vtp,
+    /// image.vti, scene.vtm and scene.pvd, phases.csv and interfaces.csv,
+    /// and report.json (--outputs chooses). Several images or a folder: the
     /// same into --out/<stem>/ per image, and --out/summary.csv.
     Segment(SegmentArgs),
     /// Write a phantom image with its ground truth (NAME.png, NAME_gt.png, NAME_labels.png).
@@ -33,11 +35,13 @@ enum Command {
     /// Segment volumes (or, without VOLUME, a built-in 3D phantom) into N
     /// phases with the tetrahedral DSC.
     ///
-    /// One volume: writes labels.tif (multi-page 8-bit, phase index 0..N-1
-    /// ordered by increasing mean), mesh.vtu (tetrahedra, cell data `phase`),
+    /// One volume: writes into --out labels.tif (multi-page 8-bit, phase
+    /// index 0..N-1 ordered by increasing mean; labels.nii.gz instead for a
+    /// NIfTI input), mesh.vtu (tetrahedra, cell data `phase`),
     /// interface.vtp (interface triangles, cell data `phase` and
-    /// `phase_other`) and report.json into --out. Several volumes or a folder
-    /// of volumes: the same into --out/<stem>/ per volume, and
+    /// `phase_other`), image.vti, scene.vtm and scene.pvd, phases.csv and
+    /// interfaces.csv, and report.json (--outputs chooses). Several volumes
+    /// or a folder of volumes: the same into --out/<stem>/ per volume, and
     /// --out/summary.csv.
     Segment3d(Segment3dArgs),
     /// Write a 3D phantom volume with its ground truth (NAME.tif, NAME_labels.tif).
