@@ -159,3 +159,36 @@ fn a_16_bit_image_reports_its_exact_range() {
     assert_eq!(r["input"]["min"].as_f64(), Some(1000.0));
     assert_eq!(r["input"]["max"].as_f64(), Some(1234.0));
 }
+
+/// The report's `final_means` are those of the label values 0, 1, ...
+/// (ascending), whatever the mesh's own label numbers: here the initial
+/// label 0 is the bright half, so it is written as value 1.
+#[test]
+fn final_means_are_ordered_like_the_labels() {
+    let d = tmp();
+    let (w, h) = (32u32, 32u32);
+    let image =
+        image::GrayImage::from_fn(w, h, |x, _| image::Luma([if x < 16 { 200 } else { 50 }]));
+    let init = image::GrayImage::from_fn(w, h, |x, _| image::Luma([u8::from(x >= 16)]));
+    let (img, labels) = (d.path().join("i.png"), d.path().join("l.png"));
+    image.save(&img).unwrap();
+    init.save(&labels).unwrap();
+    let r = report(
+        &[
+            "segment".as_ref(),
+            img.as_os_str(),
+            "--init-labels".as_ref(),
+            labels.as_os_str(),
+        ],
+        &d.path().join("o"),
+    );
+    assert_eq!(
+        r["phase_order"],
+        serde_json::json!([1, 0]),
+        "{}",
+        r["phase_order"]
+    );
+    let means = floats(&r["final_means"]);
+    assert!(means[0] < means[1], "{means:?}");
+    assert_eq!(means, floats(&r["ordered_means"]));
+}
