@@ -11,8 +11,8 @@ use crate::complex::{Complex2, Complex3};
 use crate::error::{Error, Result};
 use crate::io::resolution::{is_tiff, Resolution};
 use crate::io::{
-    save_gray8_png, save_labels_nifti, save_labels_tiff, write_bytes_atomic, write_pvd, write_vti,
-    write_vtm,
+    save_gray8_png, save_gray8_png_with_pixel_size, save_labels_nifti, save_labels_tiff,
+    write_bytes_atomic, write_pvd, write_vti, write_vtm,
 };
 use crate::io::{Frame, FrameSource, Image2, Overlay};
 use crate::segment::measurements::Measurements;
@@ -359,7 +359,13 @@ impl Segmented {
     ) -> Result<()> {
         let (w, h) = (self.dims[0], self.dims[1]);
         if outputs.labels {
-            save_gray8_png(path("labels.png"), w, h, &self.labels)?;
+            // The input's pixel size, when it had one in millimetres.
+            if self.frame.source != FrameSource::Default && self.frame.unit == "mm" {
+                let [sx, sy, _] = self.frame.spacing;
+                save_gray8_png_with_pixel_size(path("labels.png"), (w, h), &self.labels, [sx, sy])?;
+            } else {
+                save_gray8_png(path("labels.png"), w, h, &self.labels)?;
+            }
             if self.tiff_labels {
                 let resolution = (self.frame.source != FrameSource::Default).then(|| Resolution {
                     spacing: self.frame.spacing,

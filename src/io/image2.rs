@@ -513,6 +513,43 @@ pub fn save_gray8_png(
     encode_png_atomic(path, width, height, pixels, image::ExtendedColorType::L8)
 }
 
+/// [`save_gray8_png`] with the pixel size `spacing_mm` (x, y, millimetres)
+/// in the PNG's `pHYs` chunk (pixels per metre, rounded), as the input image
+/// had it, so that viewers and [`image_frame`](super::resolution::image_frame)
+/// read the labels at the input's scale.
+pub fn save_gray8_png_with_pixel_size(
+    path: impl AsRef<Path>,
+    (width, height): (usize, usize),
+    pixels: &[u8],
+    spacing_mm: [f64; 2],
+) -> Result<()> {
+    let path = path.as_ref();
+    if pixels.len() != width * height {
+        return Err(IoError::invalid(
+            path,
+            format!("{} bytes for a {width}x{height} image", pixels.len()),
+        ));
+    }
+    let (w, h) = match (u32::try_from(width), u32::try_from(height)) {
+        (Ok(w), Ok(h)) => (w, h),
+        _ => return Err(IoError::invalid(path, "image too large for PNG")),
+    };
+    let per_metre = |mm: f64| (1000.0 / mm).round().clamp(1.0, f64::from(u32::MAX)) as u32;
+    write_atomic(path, |out: &mut dyn Write| {
+        let mut encoder = png::Encoder::new(out, w, h);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_pixel_dims(Some(png::PixelDimensions {
+            xppu: per_metre(spacing_mm[0]),
+            yppu: per_metre(spacing_mm[1]),
+            unit: png::Unit::Meter,
+        }));
+        let mut writer = encoder.write_header().map_err(io::Error::other)?;
+        writer.write_image_data(pixels).map_err(io::Error::other)?;
+        writer.finish().map_err(io::Error::other)
+    })
+}
+
 /// Saves an [`Image2`] as an 8-bit grayscale PNG (values clamped to `[0,1]`,
 /// scaled by 255 and rounded), atomically.
 pub fn save_image_png(path: impl AsRef<Path>, image: &Image2) -> Result<()> {

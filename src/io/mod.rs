@@ -19,7 +19,9 @@ pub mod vtk;
 pub use atomic::{write_atomic, write_bytes_atomic};
 pub use error::IoError;
 pub use frame::{Frame, FrameSource};
-pub use image2::{save_gray8_png, save_image_png, Colour, Image2, SampleType};
+pub use image2::{
+    save_gray8_png, save_gray8_png_with_pixel_size, save_image_png, Colour, Image2, SampleType,
+};
 pub use render::{phase_color, save_gif, Overlay};
 pub use volume::{
     min_max_normalise, save_labels_nifti, save_labels_tiff, save_nifti, NonFiniteSamples, Volume,

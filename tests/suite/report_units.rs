@@ -192,3 +192,44 @@ fn final_means_are_ordered_like_the_labels() {
     assert!(means[0] < means[1], "{means:?}");
     assert_eq!(means, floats(&r["ordered_means"]));
 }
+
+/// labels.png keeps the pixel size of a PNG input's `pHYs` chunk.
+#[test]
+fn labels_png_keeps_the_input_pixel_size() {
+    let d = tmp();
+    let path = d.path().join("phys.png");
+    {
+        let file = std::fs::File::create(&path).unwrap();
+        let mut encoder = png::Encoder::new(file, 32, 32);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_pixel_dims(Some(png::PixelDimensions {
+            xppu: 2000,
+            yppu: 4000,
+            unit: png::Unit::Meter,
+        }));
+        let pixels: Vec<u8> = square(32, 50.0, 200.0, 4.0)
+            .iter()
+            .map(|&v| v as u8)
+            .collect();
+        let mut writer = encoder.write_header().unwrap();
+        writer.write_image_data(&pixels).unwrap();
+    }
+    let out = d.path().join("o");
+    let o = bin()
+        .args(["segment", "--quiet", "--outputs", "labels", "--out"])
+        .arg(&out)
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let file = std::fs::File::open(out.join("labels.png")).unwrap();
+    let reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap();
+    let dims = reader.info().pixel_dims.expect("a pHYs chunk");
+    assert_eq!(
+        (dims.xppu, dims.yppu, dims.unit),
+        (2000, 4000, png::Unit::Meter)
+    );
+}
