@@ -11,6 +11,10 @@ usage (from the repository root, after `cargo build --release` and
 `pip install -r benches/compare/requirements.txt`):
 
   python3 benches/encoding_stability.py --out OUT
+
+`--volumes four_phase:64:4 three_phase:64:3` picks the volumes (phantom,
+side, phases), `--noise` and `--seeds` the noise, `--encodings` the
+re-encodings.
 """
 from __future__ import annotations
 
@@ -23,8 +27,15 @@ import tifffile
 
 BIN = os.path.join(os.path.dirname(__file__), "..", "target", "release", "dsc-seg")
 
-# (phantom, side, phases) at σ = 0.1, noise seed 2.
+# (phantom, side, phases), by default at σ = 0.1, noise seed 2.
 VOLUMES = [("torus", 48, 2), ("two_balls", 48, 2), ("hollow_sphere", 48, 2), ("four_phase", 64, 4)]
+ENCODINGS = ["64 levels", "±0.01 grey", "±0.1 grey"]
+
+
+def volume_spec(text):
+    """`phantom:side:phases` → (phantom, side, phases)."""
+    name, side, phases = text.split(":")
+    return name, int(side), int(phases)
 MODES = {"default": [], "no finish": ["--no-fine-finish"], "uniform": ["--uniform"]}
 
 
@@ -36,14 +47,14 @@ def mean_dice(a, b, phases):
     return float(np.mean(scores))
 
 
-def encodings(volume):
-    """Name → array of each re-encoding of an 8-bit volume."""
+def encodings(volume, names):
+    """Name → array of each re-encoding in `names` of an 8-bit volume."""
     rng = np.random.default_rng(7)
     out = {"64 levels": np.rint(volume * 63.0 / 255.0).astype(np.uint16)}
     for amplitude in (0.01, 0.1):
         noise = rng.uniform(-amplitude, amplitude, volume.shape)
         out[f"±{amplitude} grey"] = (volume + noise).astype(np.float32)
-    return out
+    return {name: out[name] for name in names}
 
 
 def segment(path, phases, extra, out):
@@ -59,6 +70,11 @@ def main():
     ap.add_argument("--modes", nargs="*", choices=list(MODES), default=list(MODES))
     ap.add_argument("--edge-lengths", type=float, nargs="*", default=[],
                     help="also --no-fine-finish with these interface edge lengths L (voxels)")
+    ap.add_argument("--volumes", type=volume_spec, nargs="*", default=VOLUMES,
+                    help="phantom:side:phases (default: the four volumes above)")
+    ap.add_argument("--noise", type=float, nargs="*", default=[0.1])
+    ap.add_argument("--seeds", type=int, nargs="*", default=[2])
+    ap.add_argument("--encodings", nargs="*", choices=ENCODINGS, default=ENCODINGS)
     a = ap.parse_args()
     modes = {m: MODES[m] for m in a.modes}
     for length in a.edge_lengths:
@@ -66,10 +82,14 @@ def main():
     os.makedirs(a.out, exist_ok=True)
     print("| volume | mode | re-encoding | Dice vs 8-bit run | Dice vs truth (8-bit run's) |")
     print("|---|---|---|---|---|")
-    for name, n, phases in VOLUMES:
-        data = os.path.join(a.out, f"{name}_{n}")
-        subprocess.run([BIN, "phantom3d", name, "--size", str(n), "--noise", "0.1",
-                        "--seed", "2", "--out", data], check=True, stdout=subprocess.DEVNULL)
+    runs = [(v, s, seed) for v in a.volumes for s in a.noise for seed in a.seeds]
+    for (name, n, phases), sigma, seed in runs:
+        volume_name = f"{name}_{n}"
+        if (sigma, seed) != (0.1, 2):
+            volume_name += f"_s{sigma:.2f}_seed{seed}"
+        data = os.path.join(a.out, volume_name)
+        subprocess.run([BIN, "phantom3d", name, "--size", str(n), "--noise", str(sigma),
+                        "--seed", str(seed), "--out", data], check=True, stdout=subprocess.DEVNULL)
         eight = os.path.join(data, name + ".tif")
         truth = tifffile.imread(os.path.join(data, name + "_labels.tif"))
         volume = tifffile.imread(eight).astype(np.float64)
@@ -77,11 +97,11 @@ def main():
             tag = mode.replace(", ", "_").replace(" = ", "").replace(" ", "_")
             base = segment(eight, phases, extra, os.path.join(data, f"{tag}_8bit"))
             base_truth = mean_dice(base, truth, phases)
-            for what, encoded in encodings(volume).items():
+            for what, encoded in encodings(volume, a.encodings).items():
                 path = os.path.join(data, f"{what.replace(' ', '_')}.tif")
                 tifffile.imwrite(path, encoded)
                 labels = segment(path, phases, extra, os.path.join(data, f"{tag}_{what}"))
-                print(f"| {name}_{n} | {mode} | {what} | {mean_dice(labels, base, phases):.4f} "
+                print(f"| {volume_name} | {mode} | {what} | {mean_dice(labels, base, phases):.4f} "
                       f"| {mean_dice(labels, truth, phases):.4f} ({base_truth:.4f}) |")
 
 

@@ -283,10 +283,10 @@ pub struct Segment3dOptions {
     /// on the three- and four-phase phantoms [default: 0]
     #[arg(long, value_name = "N")]
     pub refine_start: Option<usize>,
-    /// Stop when the stopping rule is met, without the fine finish of the
-    /// two-phase default (the interfaces refined to L/2 for 3 more
-    /// iterations, so that data differing by a re-quantisation give the
-    /// same labels)
+    /// Stop when the stopping rule is met, without the fine finish (the
+    /// interfaces refined to L/2 for 3 more iterations with two phases;
+    /// with more, a last flip round, then L/2 for 5 iterations), which
+    /// makes data differing by a re-quantisation give the same labels
     #[arg(long)]
     pub no_fine_finish: bool,
     /// Keep layers of an intermediate phase as thin as the band a blurred

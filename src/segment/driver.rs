@@ -630,8 +630,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.integrate();
 
         let flips_due = self.params.label_flips
-            && (iteration - 1) % self.params.flip_interval.max(1) == 0
-            && self.finish_left.is_none();
+            && ((iteration - 1) % self.params.flip_interval.max(1) == 0
+                && self.finish_left.is_none()
+                || self.finish_flip_round_due());
         // Most iterations flip nothing: after one that flipped nothing, the
         // rules only check, beside the forces, whether they would flip.
         let mut forces = None;
@@ -651,6 +652,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let reseeded = flips_due && self.recover_lost_phases() > 0;
         if reseeded {
             forces = None;
+            self.cancel_finish();
         }
         let quiet_round = flips_due
             && iteration > 1
@@ -755,6 +757,26 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             if let Some(adaptive) = &mut self.adaptive {
                 adaptive.refine_interfaces(finish.interface_fraction * self.dsc.edge_length);
                 self.finish_left = Some(finish.iterations);
+            }
+        }
+    }
+
+    /// Whether this iteration is the finish's first and the finish begins
+    /// with a flip round ([`Finish::flip_round`](super::adaptive::Finish::flip_round)).
+    fn finish_flip_round_due(&self) -> bool {
+        self.params
+            .sizing
+            .finish
+            .is_some_and(|f| f.flip_round && self.finish_left == Some(f.iterations))
+    }
+
+    /// Calls off a finish that has begun: a phase re-seeded in its flip
+    /// round starts the evolution over, and the run goes on at `L` until
+    /// the stopping rule is met again.
+    fn cancel_finish(&mut self) {
+        if self.finish_left.take().is_some() {
+            if let Some(adaptive) = &mut self.adaptive {
+                adaptive.refine_interfaces(self.dsc.edge_length);
             }
         }
     }

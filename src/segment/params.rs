@@ -338,7 +338,9 @@ impl SegmentParams {
     /// reach their Dice within 10–30 iterations, then spent 50–250 more
     /// fitting noise), and adaptive resolution from a coarse start (`L` at
     /// the interfaces, cells up to the smallest side / 10 elsewhere: 2.5–12×
-    /// fewer tetrahedra at an equal or higher Dice on the benchmark volumes).
+    /// fewer tetrahedra at an equal or higher Dice on the benchmark volumes)
+    /// ending with a fine finish ([`Finish::for_phases`]: data differing by
+    /// a re-quantisation give the same labels).
     /// Evidence: `docs/parameters.md`.
     pub fn new_3d(phases: usize) -> Self {
         SegmentParams {
@@ -358,7 +360,7 @@ impl SegmentParams {
             sizing: SizingParams {
                 adaptive: true,
                 coarse_start: true,
-                finish: (phases == 2).then_some(Finish::TWO_PHASE),
+                finish: Some(Finish::for_phases(phases)),
                 ..SizingParams::default()
             },
             ..Self::new(phases)
