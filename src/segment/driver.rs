@@ -747,13 +747,18 @@ impl<'a, K: Raster> Segmentation<'a, K> {
 
     /// Counts down the fine finish, or begins it once the stopping rule is
     /// met: the next deform refines the interfaces to a fraction of `L`.
+    /// A run that re-seeded a phase stops without it: its phases are not
+    /// settled (a phase lost as a band may be lost again), and on a CT-like
+    /// volume whose thin fat class ends as a band the finish's flip round
+    /// and finer cells emptied a phase outright. No benchmark volume
+    /// re-seeds.
     fn advance_finish(&mut self) {
         let Some(finish) = self.params.sizing.finish else {
             return;
         };
         if let Some(left) = &mut self.finish_left {
             *left = left.saturating_sub(1);
-        } else if self.stopping_rule_met() {
+        } else if self.stopping_rule_met() && self.reseeds == 0 {
             if let Some(adaptive) = &mut self.adaptive {
                 adaptive.refine_interfaces(finish.interface_fraction * self.dsc.edge_length);
                 self.finish_left = Some(finish.iterations);
