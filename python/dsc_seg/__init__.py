@@ -128,9 +128,11 @@ def segment(image: Any, phases: Union[int, str] = 2, **options: Any) -> Segmenta
     columns) into ``phases`` phases.
 
     Any integer or floating-point dtype is accepted, with the intensities the
-    file readers would give: uint8 divided by 255, uint16 by 65535, float
-    images as they are (2D), every other type and float volumes mapped by
-    their own range to [0, 1].
+    file readers would give: uint8 divided by 255, uint16 by 65535, every
+    other type as it is in 2D and mapped by its own range to [0, 1] in 3D.
+    The report's ``input`` block gives the array's sample type, its range
+    and the phase means in the array's own values (HU for a CT array), as it
+    does for a file.
 
     Every option of ``dsc-seg segment`` (2D) or ``dsc-seg segment3d`` (3D)
     is a keyword, ``-`` written ``_``: for example ``edge_length=4``,

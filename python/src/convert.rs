@@ -1,61 +1,61 @@
-//! NumPy arrays to the library's images and volumes, with the intensities
-//! the file readers would give the same samples: unsigned 8-bit divided by
-//! 255, unsigned 16-bit by 65535; floating-point images kept as they are in
-//! 2D (as a float TIFF); every other type, and floating-point volumes, mapped
-//! by their own minimum and maximum to `[0, 1]` (as the volume reader does).
+//! NumPy arrays to the library's images and volumes, loaded as the file
+//! readers load the same samples, with the array's type and the map back to
+//! its values, so that `report.json` gives the input's range and the phase
+//! means in the array's own units (HU for a CT array): unsigned 8-bit
+//! divided by 255, unsigned 16-bit by 65535; in 2D every other type kept as
+//! it is (as a float or signed TIFF); in 3D every other type mapped by its
+//! own minimum and maximum to `[0, 1]` (as the volume reader does).
 
-use dsc_seg::io::{min_max_normalise, Image2, Volume};
+use dsc_seg::io::intensity::IntensityMap;
+use dsc_seg::io::{min_max_normalise, Image2, NonFiniteSamples, SampleType, Volume};
 use numpy::{PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-/// How a sample type maps to intensities.
-enum Samples {
-    /// Already the intensities.
-    Direct(Vec<f32>),
-    /// To be mapped by their range.
-    Raw(Vec<f64>),
+/// An array's samples as loaded, with how it stored them.
+struct Loaded {
+    /// The array's shape (slowest axis first).
+    shape: Vec<usize>,
+    /// The loaded intensities in C order.
+    data: Vec<f32>,
+    /// The array's element type, as a file's sample type.
+    sample_type: SampleType,
+    /// Loaded intensities back to the array's values.
+    map: IntensityMap,
 }
 
-/// The samples of `array` in C order, with its shape.
-fn samples(array: &Bound<'_, PyAny>, three_d: bool) -> PyResult<(Vec<usize>, Samples)> {
-    macro_rules! scaled {
-        ($t:ty, $scale:expr) => {
+/// How the samples of an element type are loaded.
+enum Loading {
+    /// Divided by the type's maximum (`bits` bits, unsigned).
+    Unsigned(u32),
+    /// Kept as they are in 2D, stretched by their range in 3D.
+    AsStored,
+}
+
+/// The samples of `array` as loaded.
+fn load(array: &Bound<'_, PyAny>, three_d: bool) -> PyResult<Loaded> {
+    macro_rules! try_types {
+        ($(($t:ty, $sample_type:expr, $loading:expr)),*) => {$(
             if let Ok(a) = array.extract::<PyReadonlyArrayDyn<'_, $t>>() {
-                let data = a.as_array().iter().map(|&s| s as f32 / $scale).collect();
-                return Ok((a.shape().to_vec(), Samples::Direct(data)));
-            }
-        };
-    }
-    macro_rules! float {
-        ($t:ty) => {
-            if let Ok(a) = array.extract::<PyReadonlyArrayDyn<'_, $t>>() {
-                let shape = a.shape().to_vec();
-                if three_d {
-                    let raw = a.as_array().iter().map(|&s| s as f64).collect();
-                    return Ok((shape, Samples::Raw(raw)));
-                }
-                let data: Vec<f32> = a.as_array().iter().map(|&s| s as f32).collect();
-                if data.iter().any(|s| !s.is_finite()) {
-                    return Err(PyValueError::new_err("image holds NaN or infinite values"));
-                }
-                return Ok((shape, Samples::Direct(data)));
-            }
-        };
-    }
-    macro_rules! ranged {
-        ($($t:ty),*) => {$(
-            if let Ok(a) = array.extract::<PyReadonlyArrayDyn<'_, $t>>() {
-                let raw = a.as_array().iter().map(|&s| s as f64).collect();
-                return Ok((a.shape().to_vec(), Samples::Raw(raw)));
+                let raw: Vec<f64> = a.as_array().iter().map(|&s| s as f64).collect();
+                return loaded(a.shape().to_vec(), raw, $sample_type, $loading, three_d);
             }
         )*};
     }
-    scaled!(u8, 255.0);
-    scaled!(u16, 65535.0);
-    float!(f32);
-    float!(f64);
-    ranged!(i8, i16, i32, i64, u32, u64);
+    use Loading::{AsStored, Unsigned};
+    use SampleType::{Float, Int, Uint16, Uint8};
+    try_types!(
+        (u8, Uint8, Unsigned(8)),
+        (u16, Uint16, Unsigned(16)),
+        (f32, Float, AsStored),
+        (f64, Float, AsStored),
+        (i8, Int, AsStored),
+        (i16, Int, AsStored),
+        (i32, Int, AsStored),
+        (i64, Int, AsStored),
+        (u32, Int, AsStored),
+        (u64, Int, AsStored)
+    );
     let dtype = array
         .getattr("dtype")
         .map(|d| d.to_string())
@@ -65,29 +65,56 @@ fn samples(array: &Bound<'_, PyAny>, three_d: bool) -> PyResult<(Vec<usize>, Sam
     )))
 }
 
-/// The intensities of `samples`.
-fn intensities(samples: Samples) -> PyResult<Vec<f32>> {
-    match samples {
-        Samples::Direct(v) => Ok(v),
-        Samples::Raw(v) => min_max_normalise(&v)
-            .map(|(samples, _)| samples)
-            .map_err(|e| PyValueError::new_err(e.to_string())),
-    }
+/// `raw` samples of `sample_type` loaded by `loading`.
+fn loaded(
+    shape: Vec<usize>,
+    raw: Vec<f64>,
+    sample_type: SampleType,
+    loading: Loading,
+    three_d: bool,
+) -> PyResult<Loaded> {
+    let (data, map) = match loading {
+        Loading::Unsigned(bits) => {
+            let map = IntensityMap::unsigned(bits);
+            let scale = map.scale();
+            (raw.iter().map(|&s| (s / scale) as f32).collect(), map)
+        }
+        Loading::AsStored if three_d => {
+            min_max_normalise(&raw).map_err(|e| PyValueError::new_err(e.to_string()))?
+        }
+        Loading::AsStored => {
+            let count = raw.iter().filter(|s| !s.is_finite()).count();
+            if count > 0 {
+                let refused = NonFiniteSamples {
+                    count,
+                    total: raw.len(),
+                };
+                return Err(PyValueError::new_err(refused.to_string()));
+            }
+            let data = raw.iter().map(|&s| s as f32).collect();
+            (data, IntensityMap::IDENTITY)
+        }
+    };
+    Ok(Loaded {
+        shape,
+        data,
+        sample_type,
+        map,
+    })
 }
 
-/// A 2D array (rows × columns) as an image.
+/// A 2D array (rows × columns) as an image of the array's sample type.
 pub fn image(array: &Bound<'_, PyAny>) -> PyResult<Image2> {
-    let (shape, s) = samples(array, false)?;
-    Ok(Image2::from_raw(shape[1], shape[0], intensities(s)?))
+    let a = load(array, false)?;
+    Ok(Image2::from_raw(a.shape[1], a.shape[0], a.data).with_sample_type(a.sample_type))
 }
 
-/// A 3D array (slices × rows × columns) as a volume.
+/// A 3D array (slices × rows × columns) as a volume of the array's sample
+/// type, with the map back to its values.
 pub fn volume(array: &Bound<'_, PyAny>) -> PyResult<Volume> {
-    let (shape, s) = samples(array, true)?;
-    Ok(Volume::from_raw(
-        shape[2],
-        shape[1],
-        shape[0],
-        intensities(s)?,
-    ))
+    let a = load(array, true)?;
+    let [nz, ny, nx] = [a.shape[0], a.shape[1], a.shape[2]];
+    Ok(Volume::from_raw(nx, ny, nz, a.data)
+        .with_sample_type(a.sample_type)
+        .with_intensity(a.map))
 }

@@ -64,6 +64,26 @@ def test_dtypes_map_as_the_file_readers_do():
         assert (labels == truth).mean() > 0.9, other.dtype
 
 
+def test_the_report_gives_the_arrays_type_and_units_2d_and_3d():
+    image, _ = dsc_seg.phantom("two_phase", size=64)
+    volume, _ = dsc_seg.phantom("two_balls", size=24, noise=0.1)
+    # CT-like signed values: the report's range and means are in them, not on [0, 1].
+    for array in (image.astype(np.int16) * 4 - 1000, volume.astype(np.int16) * 4 - 1000):
+        report = dsc_seg.segment(array, max_iterations=30).report
+        given = report["input"]
+        assert given["sample_type"] == "int"
+        assert given["intensity_unit"] == "file"
+        assert (given["min"], given["max"]) == (array.min(), array.max())
+        low, high = given["phase_means"]
+        assert array.min() <= low < high <= array.max()
+        assert high - low > 100, given  # on [0, 1] it would be below 1
+    as_u16 = image.astype(np.uint16) * 257
+    given = dsc_seg.segment(as_u16).report["input"]
+    assert given["sample_type"] == "uint16"
+    assert (given["min"], given["max"]) == (as_u16.min(), as_u16.max())
+    assert given["phase_means"][1] > 255
+
+
 def test_options_are_the_cli_options_as_keywords():
     image, _ = dsc_seg.phantom("two_phase", size=64)
     r = dsc_seg.segment(

@@ -297,9 +297,10 @@ pub(crate) fn segment_image_then<T>(
     let view = ImageView::new_2d(w, h, image.data())
         .ok_or_else(|| Error::Usage("image buffer does not match its size".into()))?;
     let t_seg = Instant::now();
+    // A file or an array has values of its own; a phantom has only [0, 1].
     let intensity = match &provenance.source {
-        Source::File(_) => Some(IntensityMap::of_sample_type(image.sample_type())),
-        _ => None,
+        Source::File(_) | Source::Array => Some(IntensityMap::of_sample_type(image.sample_type())),
+        Source::Phantom { .. } => None,
     };
     let file_values = |e| with_file_values(e, intensity, image.sample_type());
     let mut params = params;

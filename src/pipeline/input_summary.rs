@@ -18,12 +18,12 @@ pub(crate) const NORMALISED_UNIT: &str = "normalised";
 /// The `input` block of `report.json`.
 #[derive(Serialize)]
 pub(crate) struct InputSummary {
-    /// How the file stored its samples (`float` for phantoms and arrays).
+    /// How the file or array stored its samples (`float` for phantoms).
     sample_type: SampleType,
     /// Gray samples, the luminance of colour ones, or one channel (volumes: gray).
     colour: Colour,
     /// The unit of `min`, `max` and `phase_means`: [`FILE_UNIT`], or
-    /// [`NORMALISED_UNIT`] for an input without a file (a phantom, an array).
+    /// [`NORMALISED_UNIT`] for a phantom (an array's values count as a file's).
     intensity_unit: &'static str,
     /// The smallest sample, exactly as stored.
     min: f64,
