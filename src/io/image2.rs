@@ -504,13 +504,20 @@ pub fn save_gray8_png(
     pixels: &[u8],
 ) -> Result<()> {
     let path = path.as_ref();
-    if pixels.len() != width * height {
-        return Err(IoError::invalid(
-            path,
-            format!("{} bytes for a {width}x{height} image", pixels.len()),
-        ));
-    }
+    check_gray8_size(path, (width, height), pixels)?;
     encode_png_atomic(path, width, height, pixels, image::ExtendedColorType::L8)
+}
+
+/// Refuses `pixels` that are not one byte per pixel of a `width × height`
+/// image, naming the file it was to be written to.
+fn check_gray8_size(path: &Path, (width, height): (usize, usize), pixels: &[u8]) -> Result<()> {
+    if pixels.len() == width * height {
+        return Ok(());
+    }
+    Err(IoError::invalid(
+        path,
+        format!("{} bytes for a {width}x{height} image", pixels.len()),
+    ))
 }
 
 /// [`save_gray8_png`] with the pixel size `spacing_mm` (x, y, millimetres)
@@ -524,12 +531,7 @@ pub fn save_gray8_png_with_pixel_size(
     spacing_mm: [f64; 2],
 ) -> Result<()> {
     let path = path.as_ref();
-    if pixels.len() != width * height {
-        return Err(IoError::invalid(
-            path,
-            format!("{} bytes for a {width}x{height} image", pixels.len()),
-        ));
-    }
+    check_gray8_size(path, (width, height), pixels)?;
     let (w, h) = match (u32::try_from(width), u32::try_from(height)) {
         (Ok(w), Ok(h)) => (w, h),
         _ => return Err(IoError::invalid(path, "image too large for PNG")),
