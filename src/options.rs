@@ -79,7 +79,9 @@ pub struct EvolutionArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub max_edge_length: Option<f64>,
     /// Adaptive runs: start from a mesh at the largest edge length and
-    /// refine (coarse to fine) instead of starting at L and coarsening.
+    /// refine (coarse to fine) instead of starting at L and coarsening; in
+    /// 2D the start is first refined where its cells mix the classes of the
+    /// initial thresholds.
     #[arg(long)]
     pub coarse_start: bool,
 }

@@ -5,6 +5,7 @@ use super::band_phase::{band_phases, range_counts, VoxelSize};
 use super::contrast::phase_contrast;
 use super::error::SegmentError;
 use super::force_stage::{ForceStage, Reach};
+use super::graded_start::StartGrading;
 use super::image::ImageView;
 use super::integrate::{CellCache, CellStats, PhaseStats};
 use super::intensity::IntensityStats;
@@ -349,15 +350,17 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             params.sizing.sizes(K::N, extent, step, l)
         });
         let given = models.init.start_mesh();
-        let refinements = match (&given, sizes) {
-            (None, Some(sizes)) if sizes.start > sizes.interface => params.sizing.start_refinements,
-            _ => 0,
+        let coarse_start = given.is_none() && sizes.is_some_and(|s| s.start > s.interface);
+        let refinements = if coarse_start {
+            params.sizing.start_refinements
+        } else {
+            0
         };
         let mut complex = match given {
             Some(c) => c,
             None => K::box_complex(&image, sizes.map_or(l, |s| s.start))?,
         };
-        let adaptive = sizes.map(|sizes| {
+        let mut adaptive = sizes.map(|sizes| {
             let (lo, hi) = complex.domain();
             AdaptiveSizing::new::<K>(&params.sizing, sizes, lo, hi)
         });
@@ -366,6 +369,20 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         // moves them, so the first step finds them integrated already.
         let mut cell_cache = CellCache::new();
         let helper = Helper::new();
+        let mut deform_workspace = DscWorkspace::new();
+        if let Some(sizing) = adaptive.as_mut().filter(|_| coarse_start && K::N == 2) {
+            StartGrading {
+                image: &image,
+                intensity: &intensity,
+                phases: params.phases,
+                dsc: &dsc,
+                helper: helper.here(),
+                cache: &mut cell_cache,
+                cells: &mut cells,
+                workspace: &mut deform_workspace,
+            }
+            .run(&mut complex, sizing);
+        }
         cell_cache.integrate_on(helper.here(), &complex, &image, &mut cells);
         let mut hints = models.init.initialise(
             &mut complex,
@@ -417,7 +434,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             phases,
             models,
             force,
-            deform_workspace: DscWorkspace::new(),
+            deform_workspace,
             adaptive,
             evaluations: 0,
             predict_flips: true,

@@ -55,6 +55,7 @@ pub mod error;
 pub mod flips;
 mod force_stage;
 pub mod forces;
+mod graded_start;
 pub mod image;
 pub mod init;
 pub mod integrate;

@@ -105,6 +105,32 @@ fn adaptive_2d_four_phase_run_settles_and_converges() {
     );
 }
 
+/// The 2D coarse start is graded before it is labelled: refined, pass by
+/// pass, where its cells mix the classes of the initial thresholds, so the
+/// starting labels keep what a coarse cell averages away (the 5-px bar, the
+/// squares' corners) as the uniform start at L does, with far fewer cells.
+#[test]
+fn graded_2d_start_labels_the_structures_with_fewer_cells() {
+    let ph = Phantom2Kind::TwoPhase.generate(256, 0.1, 1);
+    let view = || ImageView::new_2d(ph.width, ph.height, &ph.image).unwrap();
+    let start = |params: SegmentParams| {
+        let seg = Segmentation::<D2>::new(view(), params).unwrap();
+        assert_valid(seg.complex());
+        let dice = mean_dice(&seg.label_image(), &ph.truth, 2);
+        (seg.complex().cell_count(), dice)
+    };
+    let (uniform_cells, uniform_dice) = start(SegmentParams::new(2));
+    let (graded_cells, graded_dice) = start(adaptive(SegmentParams::new(2), true));
+    assert!(
+        graded_dice >= uniform_dice - 0.003,
+        "Dice {graded_dice} graded, {uniform_dice} uniform"
+    );
+    assert!(
+        2 * graded_cells < uniform_cells,
+        "{graded_cells} cells graded, {uniform_cells} uniform"
+    );
+}
+
 #[test]
 fn coarse_to_fine_3d_keeps_the_dice_with_fewer_tets() {
     let ph = shapes3d::two_balls(32, 0.1, 1);
