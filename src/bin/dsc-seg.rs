@@ -4,7 +4,8 @@ use clap::{Parser, Subcommand};
 use dsc_seg::batch::{expand_inputs, is_batch_folder, Batch, Shard, Status, Task};
 use dsc_seg::options::{one_line, Segment3dOptions, SegmentOptions};
 use dsc_seg::pipeline::{
-    run_phantom, run_phantom3d, run_segment, run_segment3d, Segment3dJob, SegmentJob, Source,
+    check_phantom_source, run_phantom, run_phantom3d, run_segment, run_segment3d, Segment3dJob,
+    SegmentJob, Source,
 };
 use dsc_seg::segmented::Outputs;
 use dsc_seg::Error;
@@ -181,8 +182,22 @@ enum Failure {
 }
 
 impl From<Error> for Failure {
+    /// A parameter out of its range is an option's failure, whichever stage
+    /// checks it; anything else, the run's.
     fn from(e: Error) -> Self {
-        Failure::Run(e)
+        match &e {
+            Error::Segment(s) if s.is_parameter() => Failure::Options(e),
+            _ => Failure::Run(e),
+        }
+    }
+}
+
+/// A `phantom`/`phantom3d` failure: its name, side or noise (the only usage
+/// errors it has) are options; writing the files is the run.
+fn phantom_failure(e: Error) -> Failure {
+    match e {
+        Error::Usage(_) => Failure::Options(e),
+        _ => Failure::Run(e),
     }
 }
 
@@ -219,6 +234,7 @@ fn segment(a: SegmentArgs) -> Result<(), Failure> {
             )
         }
     };
+    option(check_phantom_source(&source, false))?;
     let spacing = option(a.options.spacing())?;
     let job = SegmentJob {
         source,
@@ -264,6 +280,7 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Failure> {
                 .map_or(2, dsc_seg::phantom::Phantom3Kind::phases),
         ),
     };
+    option(check_phantom_source(&source, true))?;
     let spacing = option(a.options.spacing())?;
     let job = Segment3dJob {
         source,
@@ -408,7 +425,7 @@ fn main() -> ExitCode {
                     println!("{}", a.out.join(n).display());
                 }
             })
-            .map_err(Failure::Run),
+            .map_err(phantom_failure),
         Command::Segment3d(a) => segment3d(a),
         Command::Phantom3d(a) => run_phantom3d(&a.name, a.size, a.noise, a.seed, &a.out)
             .map(|names| {
@@ -416,7 +433,7 @@ fn main() -> ExitCode {
                     println!("{}", a.out.join(n).display());
                 }
             })
-            .map_err(Failure::Run),
+            .map_err(phantom_failure),
     };
     let (e, code) = match result {
         Ok(()) => return ExitCode::SUCCESS,

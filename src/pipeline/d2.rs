@@ -99,6 +99,19 @@ fn overlay_arrays(seg: &Segmentation<'_, D2>) -> (Vec<[f64; 2]>, Vec<[u32; 3]>, 
 /// Sides of the 2D phantoms.
 const PHANTOM2_SIZES: RangeInclusive<usize> = 8..=8192;
 
+/// The 2D phantom `name`, once its name, side and noise are checked.
+pub(crate) fn phantom2(name: &str, size: usize, noise: f64) -> Result<Phantom2Kind> {
+    let kind = Phantom2Kind::from_name(name).ok_or_else(|| {
+        let names: Vec<&str> = Phantom2Kind::ALL.iter().map(|k| k.name()).collect();
+        Error::Usage(format!(
+            "unknown phantom {name:?} (one of {})",
+            names.join(", ")
+        ))
+    })?;
+    check_phantom("phantom", size, noise, PHANTOM2_SIZES)?;
+    Ok(kind)
+}
+
 /// Loads a label PNG: 8-bit values are the labels.
 fn load_labels(path: &Path, width: usize, height: usize, phases: usize) -> Result<Vec<u8>> {
     let img = Image2::load(path)?;
@@ -167,9 +180,7 @@ pub fn load_image_channel(
             noise,
             seed,
         } => {
-            let kind = Phantom2Kind::from_name(name)
-                .ok_or_else(|| Error::Usage(format!("unknown phantom {name:?}")))?;
-            check_phantom("phantom", *size, *noise, PHANTOM2_SIZES)?;
+            let kind = phantom2(name, *size, *noise)?;
             let ph = kind.generate(*size, *noise, *seed);
             let truth = GroundTruth {
                 labels: ph.truth,
@@ -402,14 +413,7 @@ pub fn run_phantom(
     seed: u64,
     out: &Path,
 ) -> Result<Vec<String>> {
-    let kind = Phantom2Kind::from_name(name).ok_or_else(|| {
-        let names: Vec<&str> = Phantom2Kind::ALL.iter().map(|k| k.name()).collect();
-        Error::Usage(format!(
-            "unknown phantom {name:?} (one of {})",
-            names.join(", ")
-        ))
-    })?;
-    check_phantom("phantom", size, noise, PHANTOM2_SIZES)?;
+    let kind = phantom2(name, size, noise)?;
     let stage = Staging::new(out)?;
     let ph = kind.generate(size, noise, seed);
     let base = kind.name();

@@ -101,14 +101,17 @@ fn quality(c: &crate::complex::Complex3) -> QualitySummary {
     }
 }
 
-fn phantom_kind(name: &str) -> Result<Phantom3Kind> {
-    Phantom3Kind::from_name(name).ok_or_else(|| {
+/// The 3D phantom `name`, once its name, side and noise are checked.
+pub(crate) fn phantom3(name: &str, size: usize, noise: f64) -> Result<Phantom3Kind> {
+    let kind = Phantom3Kind::from_name(name).ok_or_else(|| {
         let names: Vec<&str> = Phantom3Kind::ALL.iter().map(|k| k.name()).collect();
         Error::Usage(format!(
             "unknown 3D phantom {name:?} (one of {})",
             names.join(", ")
         ))
-    })
+    })?;
+    check_phantom("3D phantom", size, noise, PHANTOM3_SIZES)?;
+    Ok(kind)
 }
 
 /// Loads a label volume: values in `[0, 1]` from 8-bit data are scaled back to `0..=255`.
@@ -137,8 +140,7 @@ pub fn load_volume(source: &Source) -> Result<(Volume, Option<GroundTruth>)> {
             noise,
             seed,
         } => {
-            let kind = phantom_kind(name)?;
-            check_phantom("3D phantom", *size, *noise, PHANTOM3_SIZES)?;
+            let kind = phantom3(name, *size, *noise)?;
             let ph = kind.generate(*size, *noise, *seed);
             let phases = ph.truth.iter().max().map_or(1, |&m| m as usize + 1);
             Ok((
@@ -393,8 +395,7 @@ pub fn run_phantom3d(
     seed: u64,
     out: &Path,
 ) -> Result<Vec<String>> {
-    let kind = phantom_kind(name)?;
-    check_phantom("3D phantom", size, noise, PHANTOM3_SIZES)?;
+    let kind = phantom3(name, size, noise)?;
     let stage = Staging::new(out)?;
     let ph = kind.generate(size, noise, seed);
     let base = kind.name();

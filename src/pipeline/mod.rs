@@ -257,6 +257,23 @@ pub(crate) fn run_with_progress<K: Raster>(
     report
 }
 
+/// Checks the name, side and noise of a phantom `source` (2D, or 3D with
+/// `three_d`) before any work; other sources pass. The command line refuses
+/// a bad one as an option value.
+pub fn check_phantom_source(source: &Source, three_d: bool) -> Result<()> {
+    let Source::Phantom {
+        name, size, noise, ..
+    } = source
+    else {
+        return Ok(());
+    };
+    if three_d {
+        d3::phantom3(name, *size, *noise).map(|_| ())
+    } else {
+        d2::phantom2(name, *size, *noise).map(|_| ())
+    }
+}
+
 /// Checks a phantom's side and noise before generating it: a huge side would
 /// exhaust memory, a NaN noise would poison every sample.
 pub(crate) fn check_phantom(

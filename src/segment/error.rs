@@ -46,3 +46,19 @@ pub enum SegmentError {
     #[error("mesh: {0}")]
     Build(#[from] BuildError),
 }
+
+impl SegmentError {
+    /// Whether the error is a parameter's value out of its range (the
+    /// number of phases, the edge length, a weight or fraction), as opposed
+    /// to an input that cannot be segmented: the command line exits 2 for
+    /// these, as for options that do not parse.
+    pub fn is_parameter(&self) -> bool {
+        matches!(
+            self,
+            SegmentError::Phases(_)
+                | SegmentError::EdgeLength(..)
+                | SegmentError::Param(..)
+                | SegmentError::ChanVeseNeedsTwoPhases(_)
+        )
+    }
+}

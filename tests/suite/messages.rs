@@ -120,7 +120,9 @@ fn phases_auto_in_3d_is_a_usage_error_that_says_why() {
 }
 
 /// An output list that does not parse exits 2, as the README says of
-/// options that do not parse; so does a bad value checked after parsing.
+/// options that do not parse; so does a value out of its range, whether
+/// checked on parsing, against the parameters' ranges once the input is
+/// loaded, or by the phantom generator.
 #[test]
 fn bad_option_values_exit_2() {
     let d = tmp();
@@ -128,8 +130,28 @@ fn bad_option_values_exit_2() {
         &["segment", "--outputs", "foo"][..],
         &["segment3d", "--outputs", "overlay"][..],
         &["segment", "--phases", "99"][..],
+        &["segment", "--phantom-size", "64", "--rigidity", "-1"][..],
+        &["segment", "--phantom-size", "64", "--edge-length", "0"][..],
+        &["segment", "--phantom-size", "64", "--step-fraction", "0.9"][..],
+        &["segment", "--phantom-size", "4"][..],
+        &["segment3d", "--phantom", "nope"][..],
+        &["segment3d", "--phantom-size", "24", "--length-weight", "-1"][..],
     ] {
         let o = run(args, &d.path().join("o"));
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(!d.path().join("o").exists(), "{args:?} created --out");
+    }
+    for args in [
+        &["phantom", "nope"][..],
+        &["phantom", "two_phase", "--size", "4"][..],
+        &["phantom3d", "torus", "--noise", "-1"][..],
+    ] {
+        let o = bin()
+            .args(args)
+            .arg("--out")
+            .arg(d.path().join("o"))
+            .output()
+            .unwrap();
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
         assert!(!d.path().join("o").exists(), "{args:?} created --out");
     }
