@@ -31,7 +31,8 @@ enum Command {
     /// and report.json (--outputs chooses). Several images or a folder: the
     /// same into --out/<stem>/ per image, and --out/summary.csv.
     Segment(SegmentArgs),
-    /// Write a phantom image with its ground truth (NAME.png, NAME_gt.png, NAME_labels.png).
+    /// Write a phantom image with its ground truth (NAME.png, NAME_gt.png,
+    /// NAME_labels.png; fig6 also NAME_init.png, the user labelling of Fig. 6).
     Phantom(PhantomArgs),
     /// Segment volumes (or, without VOLUME, a built-in 3D phantom) into N
     /// phases with the tetrahedral DSC.
@@ -153,7 +154,11 @@ struct SegmentArgs {
 #[derive(Parser, Debug)]
 #[command(allow_negative_numbers = true)]
 struct PhantomArgs {
-    /// two_phase, four_phase, fig2, fig3, fig4, fig5, fig6 or thin.
+    /// two_phase, four_phase (the benchmark images), fig2 ... fig6 (the
+    /// paper's figures), three_close, four_close (close means),
+    /// two_phase_specks, four_phase_specks (salt-and-pepper specks),
+    /// disks2 ... disks6 (disks of 2 to 6 phases) or thin (lines, arcs,
+    /// small blobs, a slit, a star).
     name: String,
     /// Side in pixels.
     #[arg(long, default_value_t = 256)]
