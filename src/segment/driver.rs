@@ -206,7 +206,7 @@ pub struct SegmentReport {
 /// A segmentation in progress: the complex, the image, the models of the
 /// evolution and all scratch space.
 ///
-/// One session loop for any evolution: [`step`](Self::step) runs one
+/// One segmentation loop for any evolution: [`step`](Self::step) runs one
 /// iteration and returns its [`IterationRecord`]; [`run`](Self::run) iterates
 /// until the built-in stopping rule or the cap; [`run_until`](Self::run_until)
 /// hands every record and the segmentation itself to an observer that may
@@ -1108,7 +1108,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.run_loop(false, observe)
     }
 
-    /// The session loop; with `check_first` the built-in rule is tested before
+    /// The segmentation loop; with `check_first` the built-in rule is tested before
     /// the first step too.
     fn run_loop(
         &mut self,

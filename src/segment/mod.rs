@@ -39,7 +39,7 @@
 //! - [`measurements`]: a finished segmentation's per-phase and per-interface
 //!   figures; [`partial_volume`]: areas/volumes from the band's intensities;
 //!   [`censored`]: the model of intensities clipped where the data saturate;
-//! - [`driver`]: the session loop, the Mumford–Shah energy and the stopping rule;
+//! - [`driver`]: the segmentation loop, the Mumford–Shah energy and the stopping rule;
 //! - [`params`] and [`error`].
 
 pub mod adaptive;

@@ -85,7 +85,7 @@ fn volcano_dents_the_interface_near_it_only() {
     assert!(mean_dice(&o.before, &ph.truth, 2) > 0.97);
 }
 
-/// The session loop with user-supplied pieces: a closure initialiser, a
+/// The segmentation loop with user-supplied pieces: a closure initialiser, a
 /// custom label rule, a custom stopping rule, parameters changed mid-run.
 #[test]
 fn custom_models_and_observer_drive_the_same_loop() {
