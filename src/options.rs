@@ -263,7 +263,8 @@ pub struct Segment3dOptions {
     #[arg(long)]
     pub init_labels: Option<PathBuf>,
     /// Initial surface (closed triangle mesh: OFF, OBJ or STL, in voxel
-    /// coordinates strictly inside [0,nx]×[0,ny]×[0,nz]): the initial mesh is
+    /// coordinates strictly inside [0,nx]×[0,ny]×[0,nz], so for a volume
+    /// without a voxel size, or with --spacing 1,1,1): the initial mesh is
     /// tetrahedralised by TetGen to conform to it, phase 1 inside, 0 outside;
     /// replaces --init. Needs a build with `--features tetgen` (AGPL-3 TetGen).
     #[allow(rustdoc::broken_intra_doc_links)] // the brackets are intervals, shown as is by --help
