@@ -155,7 +155,8 @@ pub struct SegmentOptions {
     /// Number of phases N, 2..=64, or `auto`: chosen from the data (the
     /// largest count up to --max-phases whose phases are all regions of their
     /// own mean: none empty, none duplicating another's mean within the noise,
-    /// none a band along edges) [default: 2, or the phantom's].
+    /// none a band along edges, none without a plateau of its own beyond the
+    /// blur of its edges) [default: 2, or the phantom's].
     #[arg(long, allow_hyphen_values = true, value_parser = parse_phases)]
     pub phases: Option<PhaseCount>,
     /// Largest number of phases tried by --phases auto.
