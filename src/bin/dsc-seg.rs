@@ -73,7 +73,8 @@ struct BatchArgs {
 #[derive(Parser, Debug)]
 #[command(allow_negative_numbers = true)]
 struct Segment3dArgs {
-    /// Input volumes: multi-page TIFF stacks (8/16 bit), folders of 2D slices,
+    /// Input volumes: multi-page grayscale TIFF stacks (8/16 bit, or signed,
+    /// 32-bit or float samples), folders of 2D slices,
     /// NIfTI (.nii, .nii.gz), or folders of these. Without any, a built-in 3D
     /// phantom is segmented.
     volumes: Vec<PathBuf>,
@@ -124,8 +125,8 @@ struct Phantom3dArgs {
 #[derive(Parser, Debug)]
 #[command(allow_negative_numbers = true)]
 struct SegmentArgs {
-    /// Input images (PNG, TIFF, JPEG, ...; 8/16 bit, gray or colour) or
-    /// folders of them. Without any, a built-in phantom is segmented.
+    /// Input images (PNG, TIFF, JPEG, ...; 8/16 bit, gray or colour; TIFFs
+    /// of float or signed samples) or folders of them. Without any, a built-in phantom is segmented.
     images: Vec<PathBuf>,
     /// Output directory (created if missing).
     #[arg(long)]
