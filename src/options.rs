@@ -293,6 +293,13 @@ pub struct Segment3dOptions {
     /// makes data differing by a re-quantisation give the same labels
     #[arg(long)]
     pub no_fine_finish: bool,
+    /// Start from the mesh of the volume itself rather than from the final
+    /// mesh of a run on the volume at half resolution (at 2·L, without the
+    /// fine finish), which volumes of at least 128 voxels a side get by
+    /// default: their interfaces then start near the data's instead of
+    /// travelling there at full resolution
+    #[arg(long)]
+    pub no_coarse_pass: bool,
     /// Keep layers of an intermediate phase as thin as the band a blurred
     /// edge leaves between two other phases: by default (three or more
     /// phases) they go back to the phases on their sides, since under the
@@ -326,6 +333,9 @@ impl Segment3dOptions {
         }
         if self.no_fine_finish {
             params.sizing.finish = None;
+        }
+        if self.no_coarse_pass {
+            params.coarse_pass = false;
         }
         if self.keep_thin_layers {
             params.band_flips = false;

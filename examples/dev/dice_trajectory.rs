@@ -3,13 +3,15 @@
 //! that point: what the stopping rule sees against what it is meant to
 //! judge, from one run instead of one run per `--max-iterations N`.
 //!
-//! `cargo run --release --example dice_trajectory -- VOLUME TRUTH PHASES [EVERY] [AFTER]`
+//! `cargo run --release --example dice_trajectory -- VOLUME TRUTH PHASES [EVERY] [AFTER] [--no-coarse-pass]`
 //!
 //! `TRUTH` is a label volume of the same size (any distinct values, one per
 //! phase; phases are matched to labels by the best of all pairings). The Dice
 //! is scored every `EVERY` iterations (default 1) and at every flip round;
 //! with `AFTER` the run goes on that many iterations past the stopping rule
-//! (the fine finish, if any, never begins then).
+//! (the fine finish, if any, never begins then). The iterations listed are
+//! those at full resolution, after the coarse pass where the default runs
+//! one (`SegmentParams::coarse_pass`); `--no-coarse-pass` runs without it.
 
 use dsc_seg::dim::D3;
 use dsc_seg::io::volume::Volume;
@@ -74,7 +76,9 @@ fn dense_truth(truth: &Volume) -> Vec<u8> {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let no_coarse_pass = args.iter().any(|a| a == "--no-coarse-pass");
+    args.retain(|a| a != "--no-coarse-pass");
     if args.len() < 3 {
         eprintln!("usage: dice_trajectory VOLUME TRUTH PHASES [EVERY] [AFTER]");
         std::process::exit(2);
@@ -84,7 +88,8 @@ fn main() {
     let phases: usize = args[2].parse().expect("PHASES");
     let every: usize = args.get(3).map_or(1, |s| s.parse().expect("EVERY"));
     let after: usize = args.get(4).map_or(0, |s| s.parse().expect("AFTER"));
-    let params = SegmentParams::new_3d(phases);
+    let mut params = SegmentParams::new_3d(phases);
+    params.coarse_pass = !no_coarse_pass;
     let flip_interval = params.flip_interval;
     let view = ImageView::new_3d(volume.dims(), volume.data())
         .and_then(|v| v.with_spacing(volume.frame().domain_scale))

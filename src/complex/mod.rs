@@ -16,6 +16,7 @@ mod interface;
 mod junction;
 mod measure;
 mod seen;
+mod stretch;
 #[cfg(feature = "tetgen")]
 pub mod surface;
 mod validate;

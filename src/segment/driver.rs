@@ -2,6 +2,7 @@
 
 use super::adaptive::{AdaptiveSizing, Sizes};
 use super::band_phase::{band_phases, range_counts, VoxelSize};
+use super::coarse_pass::{self, CoarsePassSummary};
 use super::contrast::phase_contrast;
 use super::error::SegmentError;
 use super::force_stage::{ForceStage, Reach};
@@ -201,6 +202,10 @@ pub struct SegmentReport {
     pub cells: usize,
     /// The sizes of adaptive resolution (`None`: the uniform mesh at `L`).
     pub sizes: Option<Sizes>,
+    /// The coarse pass that gave the start mesh (`None`: none ran; see
+    /// [`SegmentParams::coarse_pass`]). `iterations` and `history` are the
+    /// full-resolution run's.
+    pub coarse_pass: Option<CoarsePassSummary>,
 }
 
 /// A segmentation in progress: the complex, the image, the models of the
@@ -265,14 +270,42 @@ pub struct Segmentation<'a, K: Raster> {
     /// Iterations of the fine finish still to run (`None`: not begun; see
     /// [`Finish`](super::adaptive::Finish)).
     finish_left: Option<usize>,
+    /// What the coarse pass that gave the start mesh did, if one ran.
+    coarse_pass: Option<CoarsePassSummary>,
 }
 
 impl<'a, K: Raster> Segmentation<'a, K> {
     /// The paper's segmentation ([`Models::paper`]): validates the input,
     /// builds the mesh at edge length L and initialises the labels.
+    /// With [`SegmentParams::coarse_pass`] on an image it
+    /// [applies](coarse_pass::applies) to, the mesh and labels come from a
+    /// run on the image at half resolution ([`coarse_pass`]).
     pub fn new(image: ImageView<'a>, params: SegmentParams) -> Result<Self, SegmentError> {
+        if coarse_pass::applies(&params, &image) {
+            return Self::after_coarse_pass(image, params);
+        }
         let models = Models::paper(&params);
         Self::with_models(image, params, models)
+    }
+
+    /// The paper's segmentation started from the final mesh of the coarse
+    /// pass, its labels and its initial thresholds (for the report and the
+    /// band-phase test).
+    fn after_coarse_pass(
+        image: ImageView<'a>,
+        params: SegmentParams,
+    ) -> Result<Self, SegmentError> {
+        params.validate_in(image.dims, image.spacing)?;
+        let l = params.resolved_edge_length_in(image.dims, image.spacing);
+        let (complex, thresholds, summary) = coarse_pass::coarse_mesh::<K>(&image, &params, l)?;
+        let mut s = Self::from_complex(image, params, complex)?;
+        if thresholds.len() + 1 == s.params.phases {
+            s.initial_range_counts = range_counts(s.image.data, &thresholds);
+        }
+        s.initial_thresholds = thresholds;
+        s.times.setup += summary.seconds;
+        s.coarse_pass = Some(summary);
+        Ok(s)
     }
 
     /// A segmentation running the given models (see [`Models`]): validates the
@@ -453,6 +486,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             since_new_low: 0,
             quiet_round_on_plateau: false,
             finish_left: None,
+            coarse_pass: None,
         };
         s.step = s.params.step_fraction;
         s.nu = s.length_weight();
@@ -1173,6 +1207,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             vertices: self.complex.vertex_count(),
             cells: self.complex.cell_count(),
             sizes: self.adaptive.as_ref().map(AdaptiveSizing::sizes),
+            coarse_pass: self.coarse_pass.clone(),
         }
     }
 

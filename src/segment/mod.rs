@@ -36,6 +36,8 @@
 //!   volcano);
 //! - [`adaptive`]: the sizing field of adaptive resolution (refinement
 //!   where the data is not explained, coarsening where nothing happens);
+//! - [`coarse_pass`]: a first run on the image at half resolution whose
+//!   mesh starts the run at full resolution;
 //! - [`measurements`]: a finished segmentation's per-phase and per-interface
 //!   figures; [`partial_volume`]: areas/volumes from the band's intensities;
 //!   [`censored`]: the model of intensities clipped where the data saturate;
@@ -48,6 +50,7 @@ pub mod band_flips;
 pub mod band_phase;
 pub mod censored;
 pub mod cluster_flips;
+pub mod coarse_pass;
 pub mod contrast;
 pub mod driver;
 pub mod edge_blur;

@@ -276,6 +276,12 @@ pub struct SegmentParams {
     /// Adaptive resolution (off: the paper's uniform mesh at `L`).
     #[serde(default)]
     pub sizing: SizingParams,
+    /// Whether an adaptive run started from the histogram or the range on
+    /// an image of at least [`MIN_SIDE`](super::coarse_pass::MIN_SIDE)
+    /// samples a side starts from the final mesh of a run on the image at
+    /// half resolution ([`coarse_pass`](super::coarse_pass)).
+    #[serde(default)]
+    pub coarse_pass: bool,
 }
 
 impl SegmentParams {
@@ -310,6 +316,7 @@ impl SegmentParams {
                 settle: Some(SETTLE_ITERATIONS),
                 ..SizingParams::default()
             },
+            coarse_pass: false,
         }
     }
 
@@ -340,7 +347,9 @@ impl SegmentParams {
     /// the interfaces, cells up to the smallest side / 10 elsewhere: 2.5–12×
     /// fewer tetrahedra at an equal or higher Dice on the benchmark volumes)
     /// ending with a fine finish ([`Finish::for_phases`]: data differing by
-    /// a re-quantisation give the same labels).
+    /// a re-quantisation give the same labels), and on volumes of at least
+    /// [`MIN_SIDE`](super::coarse_pass::MIN_SIDE) voxels a side the coarse
+    /// pass ([`coarse_pass`](Self::coarse_pass)).
     /// Evidence: `docs/parameters.md`.
     pub fn new_3d(phases: usize) -> Self {
         SegmentParams {
@@ -363,6 +372,7 @@ impl SegmentParams {
                 finish: Some(Finish::for_phases(phases)),
                 ..SizingParams::default()
             },
+            coarse_pass: true,
             ..Self::new(phases)
         }
     }
