@@ -127,9 +127,11 @@ def segment(image: Any, phases: Union[int, str] = 2, **options: Any) -> Segmenta
     """Segments a 2D image (rows × columns) or a 3D volume (slices × rows ×
     columns) into ``phases`` phases.
 
-    Any integer or floating-point dtype is accepted, with the intensities the
-    file readers would give: uint8 divided by 255, uint16 by 65535, every
-    other type as it is in 2D and mapped by its own range to [0, 1] in 3D.
+    Any integer or floating-point dtype is accepted (float16 as float32),
+    with the intensities the file readers would give: uint8 divided by 255,
+    uint16 by 65535, every other type as it is in 2D and mapped by its own
+    range to [0, 1] in 3D. A colour image (rows × columns × 3 or 4
+    channels) is refused: pass one channel or its luminance.
     The report's ``input`` block gives the array's sample type, its range
     and the phase means in the array's own values (HU for a CT array), as it
     does for a file.
@@ -147,9 +149,33 @@ def segment(image: Any, phases: Union[int, str] = 2, **options: Any) -> Segmenta
     Raises ValueError for bad arguments or an unusable image, OSError when a
     file named by an option cannot be read.
     """
-    array = np.asarray(image)
+    array = _checked_array(np.asarray(image))
     args = _option_args({"phases": phases, **options})
     return Segmentation(_native.segment(array, args))
+
+
+def _checked_array(array: np.ndarray) -> np.ndarray:
+    """``array`` as the native code takes it: half-precision floats widened
+    to float32 (the native code reads 32- and 64-bit floats), and a colour
+    image refused rather than segmented as a volume.
+
+    A colour image as NumPy and image libraries hold it (rows × columns ×
+    3 or 4 channels) has the shape of a volume of as many slices as rows,
+    3 or 4 voxels wide: segmented as one, it gives labels of the right
+    shape and a plausible look, but mixes the channels along a spatial axis.
+    """
+    if array.ndim == 3 and array.shape[2] in (3, 4) and min(array.shape[:2]) > 4:
+        raise ValueError(
+            f"the array's shape {array.shape} is that of a colour image "
+            f"(rows × columns × {array.shape[2]} channels), not of a volume "
+            "(slices × rows × columns): pass one channel (image[..., 0]) or "
+            "the luminance as a 2D array; a volume only 3 or 4 voxels wide "
+            "along its last axis is taken with that axis moved first "
+            "(np.moveaxis(volume, 2, 0))"
+        )
+    if array.dtype == np.float16:
+        return array.astype(np.float32)
+    return array
 
 
 def phantom(

@@ -162,6 +162,27 @@ def test_bad_arguments_raise_value_error_with_the_cli_message(tmp_path):
         dsc_seg.phantom("no_such_phantom")
 
 
+def test_a_colour_image_is_refused_not_segmented_as_a_volume():
+    image, _ = dsc_seg.phantom("two_phase", size=32)
+    for channels in (3, 4):
+        colour = np.repeat(image[:, :, None], channels, axis=2)
+        with pytest.raises(ValueError, match="colour image"):
+            dsc_seg.segment(colour)
+    # Its channel, or a volume with the short axis first, is segmented.
+    assert dsc_seg.segment(colour[..., 0]).labels.shape == image.shape
+    volume = np.moveaxis(np.repeat(image[:, :, None], 3, axis=2), 2, 0)
+    assert dsc_seg.segment(volume, max_iterations=2).labels.shape == volume.shape
+
+
+def test_half_precision_floats_give_the_float32_labels():
+    image, _ = dsc_seg.phantom("two_phase", size=48, noise=0.2)
+    as_float = image.astype(np.float32) / 255
+    half = dsc_seg.segment(as_float.astype(np.float16))
+    single = dsc_seg.segment(as_float.astype(np.float16).astype(np.float32))
+    assert np.array_equal(half.labels, single.labels)
+    assert half.report["input"]["sample_type"] == "float"
+
+
 def test_write_gives_the_cli_files(tmp_path):
     image, _ = dsc_seg.phantom("two_phase", size=48)
     result = dsc_seg.segment(image)
