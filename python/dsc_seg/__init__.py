@@ -131,7 +131,10 @@ def segment(image: Any, phases: Union[int, str] = 2, **options: Any) -> Segmenta
     with the intensities the file readers would give: uint8 divided by 255,
     uint16 by 65535, every other type as it is in 2D and mapped by its own
     range to [0, 1] in 3D. A colour image (rows × columns × 3 or 4
-    channels) is refused: pass one channel or its luminance.
+    channels) is refused: pass one channel or its luminance. So is a 2D array
+    of 32/64-bit values that float32 would round by more than a thousandth
+    of their range (values far from zero that vary little): subtract an
+    offset such as the minimum first.
     The report's ``input`` block gives the array's sample type, its range
     and the phase means in the array's own values (HU for a CT array), as it
     does for a file.

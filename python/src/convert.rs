@@ -7,7 +7,9 @@
 //! own minimum and maximum to `[0, 1]` (as the volume reader does).
 
 use dsc_seg::io::intensity::IntensityMap;
-use dsc_seg::io::{min_max_normalise, Image2, NonFiniteSamples, SampleType, Volume};
+use dsc_seg::io::{
+    min_max_normalise, wide_samples_as_f32, Image2, NonFiniteSamples, SampleType, Volume,
+};
 use numpy::{PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -91,7 +93,8 @@ fn loaded(
                 };
                 return Err(PyValueError::new_err(refused.to_string()));
             }
-            let data = raw.iter().map(|&s| s as f32).collect();
+            let data = wide_samples_as_f32(raw.iter().copied())
+                .map_err(|reason| PyValueError::new_err(format!("the array: {reason}")))?;
             (data, IntensityMap::IDENTITY)
         }
     };

@@ -183,6 +183,15 @@ def test_half_precision_floats_give_the_float32_labels():
     assert half.report["input"]["sample_type"] == "float"
 
 
+def test_an_array_that_32_bit_floats_would_coarsen_is_refused():
+    image, _ = dsc_seg.phantom("two_phase", size=32)
+    with pytest.raises(ValueError, match="more precision"):
+        dsc_seg.segment(image.astype(np.uint32) + 2**26)
+    with pytest.raises(ValueError, match="more precision"):
+        dsc_seg.segment(1.0 + image.astype(np.float64) * 1e-9)
+    assert dsc_seg.segment(image.astype(np.uint32) * 2**20).labels.shape == image.shape
+
+
 def test_write_gives_the_cli_files(tmp_path):
     image, _ = dsc_seg.phantom("two_phase", size=48)
     result = dsc_seg.segment(image)

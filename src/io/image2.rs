@@ -207,15 +207,15 @@ impl Image2 {
                 p.iter().map(|&v| v as f32 / 65535.0).collect(),
                 SampleType::Uint16,
             ),
-            D::U32(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
-            D::U64(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
+            D::U32(p) => (as_f32(path, p.iter().map(|&v| v as f64))?, SampleType::Int),
+            D::U64(p) => (as_f32(path, p.iter().map(|&v| v as f64))?, SampleType::Int),
             D::I8(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
             D::I16(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
-            D::I32(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
-            D::I64(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Int),
+            D::I32(p) => (as_f32(path, p.iter().map(|&v| v as f64))?, SampleType::Int),
+            D::I64(p) => (as_f32(path, p.iter().map(|&v| v as f64))?, SampleType::Int),
             D::F16(p) => (p.iter().map(|v| v.to_f32()).collect(), SampleType::Float),
             D::F32(p) => (p, SampleType::Float),
-            D::F64(p) => (p.iter().map(|&v| v as f32).collect(), SampleType::Float),
+            D::F64(p) => (as_f32(path, p.iter().copied())?, SampleType::Float),
         };
         if data.len() != width * height {
             return Err(IoError::MalformedTiff {
@@ -495,6 +495,53 @@ pub(crate) fn image_error(path: &Path, e: ImageError) -> IoError {
     }
 }
 
+/// The largest rounding to `f32` that a 2D image's samples may take, as a
+/// fraction of their range: a thousandth, finer than any phase contrast
+/// worth segmenting and far coarser than `f32`'s own 2⁻²⁴ of the magnitude
+/// on ordinary data.
+const MAX_F32_ROUNDING: f64 = 1e-3;
+
+/// Samples of a wider type (32/64-bit integers, 64-bit floats) as the
+/// `f32`s an image keeps, in the file's own values. Refused, with the reason,
+/// when rounding them to `f32` moves a sample by more than a thousandth of
+/// their range (`MAX_F32_ROUNDING`), as it does for values far from zero that
+/// vary little (a 32-bit count offset by 2²⁶, a 64-bit float of 1 ± 10⁻⁶):
+/// the image would be segmented, and its range and phase means
+/// reported, as a coarser (or even constant) image than the file or array
+/// holds. Non-finite samples are left to the check that names them.
+pub fn wide_samples_as_f32(
+    samples: impl Iterator<Item = f64> + Clone,
+) -> std::result::Result<Vec<f32>, String> {
+    let finite = samples.clone().filter(|v| v.is_finite());
+    let (lo, hi) = finite
+        .clone()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    let rounding = finite
+        .map(|v| (v - v as f32 as f64).abs())
+        .fold(0.0, f64::max);
+    if hi > lo && rounding > MAX_F32_ROUNDING * (hi - lo) {
+        return Err(format!(
+            "its samples ({lo} to {hi}) need more precision than the 32-bit floats an \
+             image is segmented in keep at their magnitude (rounding moves them by up \
+             to {rounding}, {:.2} % of their range); subtract an offset such as the \
+             minimum first",
+            100.0 * rounding / (hi - lo)
+        ));
+    }
+    Ok(samples.map(|v| v as f32).collect())
+}
+
+/// [`wide_samples_as_f32`] of a file's samples, refused as an unsupported
+/// image naming `path`.
+fn as_f32(path: &Path, samples: impl Iterator<Item = f64> + Clone) -> Result<Vec<f32>> {
+    wide_samples_as_f32(samples).map_err(|reason| IoError::Unsupported {
+        path: path.to_path_buf(),
+        reason,
+    })
+}
+
 /// Saves `pixels` (row-major, `width * height` bytes) as an 8-bit grayscale
 /// PNG, atomically (see [`crate::io::write_atomic`]).
 pub fn save_gray8_png(
@@ -658,6 +705,52 @@ mod tests {
         assert!(Image2::load(&g).is_err());
         let missing = Image2::load(dir.path().join("missing.png")).unwrap_err();
         assert!(matches!(missing, IoError::Unreadable { .. }));
+    }
+
+    /// A 32-bit integer or 64-bit float TIFF whose samples `f32` cannot
+    /// tell apart at their magnitude is refused with the figures and what to
+    /// do; the same variation nearer zero, or a wide range at that
+    /// magnitude, is read exactly as stored.
+    #[test]
+    fn wide_samples_that_f32_would_coarsen_are_refused() {
+        use tiff::encoder::{colortype, TiffEncoder};
+        let dir = tempfile::tempdir().unwrap();
+        let tiff = |name: &str| dir.path().join(name);
+        let write_u32 = |name: &str, data: &[u32]| {
+            TiffEncoder::new(std::fs::File::create(tiff(name)).unwrap())
+                .unwrap()
+                .write_image::<colortype::Gray32>(4, 4, data)
+                .unwrap();
+        };
+        let write_f64 = |name: &str, data: &[f64]| {
+            TiffEncoder::new(std::fs::File::create(tiff(name)).unwrap())
+                .unwrap()
+                .write_image::<colortype::Gray64Float>(4, 4, data)
+                .unwrap();
+        };
+        let counts: Vec<u32> = (0..16).map(|i| i * 16).collect();
+        let offset: Vec<u32> = counts.iter().map(|c| c + (1 << 26) + 1).collect();
+        write_u32("offset.tif", &offset);
+        let e = Image2::load(tiff("offset.tif")).unwrap_err().to_string();
+        assert!(
+            e.contains("more precision") && e.contains("67108865"),
+            "{e}"
+        );
+        write_u32("near_zero.tif", &counts);
+        let img = Image2::load(tiff("near_zero.tif")).unwrap();
+        assert_eq!(img.data[15], 240.0);
+        let wide: Vec<u32> = (0..16).map(|i| i * (1 << 27) + 1).collect();
+        write_u32("wide.tif", &wide);
+        assert!(Image2::load(tiff("wide.tif")).is_ok());
+        let almost_one: Vec<f64> = (0..16).map(|i| 1.0 + i as f64 * 1e-9).collect();
+        write_f64("almost_one.tif", &almost_one);
+        let e = Image2::load(tiff("almost_one.tif"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("more precision"), "{e}");
+        let ordinary: Vec<f64> = (0..16).map(|i| i as f64 * 0.1 - 0.5).collect();
+        write_f64("ordinary.tif", &ordinary);
+        assert!(Image2::load(tiff("ordinary.tif")).is_ok());
     }
 
     #[test]

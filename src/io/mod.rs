@@ -20,7 +20,8 @@ pub use atomic::{write_atomic, write_bytes_atomic};
 pub use error::IoError;
 pub use frame::{Frame, FrameSource};
 pub use image2::{
-    save_gray8_png, save_gray8_png_with_pixel_size, save_image_png, Colour, Image2, SampleType,
+    save_gray8_png, save_gray8_png_with_pixel_size, save_image_png, wide_samples_as_f32, Colour,
+    Image2, SampleType,
 };
 pub use render::{phase_color, save_gif, Overlay};
 pub use volume::{
