@@ -67,7 +67,9 @@ pub struct EvolutionArgs {
     pub length_weight: Option<f64>,
     /// Adaptive resolution: a graded mesh, L at the interfaces, finer where
     /// the data is not explained (down to --min-edge-length), coarser away
-    /// from interfaces (up to --max-edge-length); starts from a coarse mesh.
+    /// from interfaces (up to --max-edge-length). In 2D it starts at L and
+    /// coarsens (--coarse-start: from a coarse mesh); in 3D, where it is the
+    /// default, it starts from a coarse mesh.
     #[arg(long)]
     pub adaptive: bool,
     /// Smallest target edge length of the adaptive mesh, in the unit of the
