@@ -286,7 +286,9 @@ pub struct Segment3dOptions {
     /// labels' interfaces) and running the label flips on the refined
     /// cells: the interfaces start near where the data puts them. Fewer
     /// iterations at a higher Dice on the brain-like phantom, a lower Dice
-    /// on the three- and four-phase phantoms [default: 0]
+    /// on the three- and four-phase phantoms. With the coarse pass (volumes
+    /// of 128 voxels a side and more) it refines the pass's start mesh
+    /// [default: 0]
     #[arg(long, value_name = "N")]
     pub refine_start: Option<usize>,
     /// Stop when the stopping rule is met, without the fine finish (the
