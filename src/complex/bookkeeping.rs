@@ -48,6 +48,15 @@ impl Bookkeeping {
     }
 }
 
+impl Bookkeeping {
+    /// Makes the complex another one from now on, for a change that moves
+    /// every vertex without stamping the clocks: no record kept against the
+    /// old identity is read against the new geometry.
+    pub(super) fn renew_identity(&mut self) {
+        self.identity = fresh_identity();
+    }
+}
+
 /// A clone is another complex from then on: its own identity, the same
 /// records.
 impl Clone for Bookkeeping {

@@ -17,7 +17,8 @@ impl<K: Dim> Complex<K> {
     /// rounding may not for a nearly flat cell: the exact orientation of
     /// every cell is checked before anything changes, and a cell that would
     /// not stay positive is an error ([`BuildError::Degenerate`], the complex
-    /// untouched).
+    /// untouched). The stretched complex has a new identity, as a clone
+    /// does, so no record kept against the old one is read against it.
     pub fn stretch_to(&mut self, new_max: K::Point) -> Result<(), BuildError> {
         let (min, max) = (self.domain_min, self.domain_max);
         if !(0..K::N).all(|a| new_max[a].is_finite() && new_max[a] > min[a]) {
@@ -54,6 +55,10 @@ impl<K: Dim> Complex<K> {
         }
         self.positions = positions;
         self.domain_max = new_max;
+        // Every vertex may have moved without a clock: records kept
+        // against this complex (the improvement memo, refused collapses)
+        // must not be read against the stretched one.
+        self.book.renew_identity();
         self.reclassify_all();
         Ok(())
     }
@@ -69,7 +74,9 @@ mod tests {
     fn a_stretched_box_mesh_covers_the_new_box_and_validates() {
         let mut c = Complex::<D3>::cuboid([8.0, 6.0, 4.0], 2.0).unwrap();
         let before = c.to_arrays();
+        let identity = c.identity();
         c.stretch_to(Vector3::new(7.0, 6.0, 3.5)).unwrap();
+        assert_ne!(c.identity(), identity, "a stretched complex is another one");
         assert!(c.validate().is_empty(), "{:?}", c.validate());
         assert_eq!(c.domain().1, Vector3::new(7.0, 6.0, 3.5));
         assert!((c.domain_measure() - 7.0 * 6.0 * 3.5).abs() < 1e-9);
