@@ -58,9 +58,10 @@ struct BatchArgs {
     /// report, or all. scene.vtm and scene.pvd come with any VTK file.
     #[arg(long, default_value = "all")]
     outputs: String,
-    /// Inputs segmented at once, each on one thread [default: the number of cores].
+    /// Inputs segmented at once, each on one thread, at least 1 (checked
+    /// for a single input too) [default: the number of cores].
     #[arg(long, value_name = "N")]
-    jobs: Option<usize>,
+    jobs: Option<std::num::NonZeroUsize>,
     /// Only inputs I, I+N, I+2N, ... of the list (0 <= I < N), for job
     /// arrays on a cluster; the summary is then summary-I-of-N.csv.
     #[arg(long, value_name = "I/N")]
@@ -317,12 +318,7 @@ fn run_batch(
     quiet: bool,
 ) -> Result<(), Failure> {
     let jobs = match args.jobs {
-        Some(0) => {
-            return Err(Failure::Options(Error::Usage(
-                "--jobs 0: at least one job".into(),
-            )))
-        }
-        Some(n) => n,
+        Some(n) => n.get(),
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     let batch = Batch {

@@ -136,6 +136,8 @@ fn bad_option_values_exit_2() {
         &["segment", "--phantom-size", "4"][..],
         &["segment3d", "--phantom", "nope"][..],
         &["segment3d", "--phantom-size", "24", "--length-weight", "-1"][..],
+        // --jobs matters only to batches, but 0 is refused for one input too.
+        &["segment", "--phantom-size", "64", "--jobs", "0"][..],
     ] {
         let o = run(args, &d.path().join("o"));
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
