@@ -21,11 +21,20 @@
 //! `0.2126 R + 0.7152 G + 0.0722 B`, applied to the stored (gamma-encoded)
 //! values; alpha is ignored. [`Image2::load_channel`] takes one channel
 //! instead; [`Image2::colour`] says which was done.
+//!
+//! # Orientation
+//!
+//! A JPEG or TIFF whose EXIF orientation asks for a rotation or a mirror is
+//! turned upright on reading, as photo viewers show it, so every output lines
+//! up with the picture the user sees (VTK's own readers do not apply EXIF, so
+//! in ParaView such an output lines up with the upright picture, not the
+//! sensor's rows).
 
-use std::io::{self, Write};
+use std::fs::File;
+use std::io::{self, BufReader, Write};
 use std::path::Path;
 
-use image::{DynamicImage, ImageError, ImageFormat, ImageReader};
+use image::{DynamicImage, ImageDecoder, ImageError, ImageFormat, ImageReader, ImageResult};
 use serde::Serialize;
 
 use super::atomic::write_atomic;
@@ -163,7 +172,7 @@ impl Image2 {
             .with_guessed_format()
             .map_err(|e| IoError::unreadable(path, e))?;
         let is_tiff = reader.format() == Some(ImageFormat::Tiff);
-        match reader.decode() {
+        match decode_upright(reader) {
             Ok(img) => Self::from_dynamic(path, img),
             Err(ImageError::Unsupported(_)) if is_tiff => Self::load_gray_tiff(path),
             Err(e) => Err(image_error(path, e)),
@@ -253,7 +262,7 @@ impl Image2 {
             .with_guessed_format()
             .map_err(|e| IoError::unreadable(path, e))?;
         let is_tiff = reader.format() == Some(ImageFormat::Tiff);
-        let img = match reader.decode() {
+        let img = match decode_upright(reader) {
             Ok(img) => img,
             // Grayscale TIFFs of other sample types have their one channel.
             Err(ImageError::Unsupported(_)) if is_tiff && k == 0 => {
@@ -475,6 +484,19 @@ pub(crate) fn lerp_nodes(c: f64, n: usize) -> (usize, usize, f32) {
 }
 
 /// Maps an `image` crate error to an [`IoError`] naming `path`.
+/// Decodes an image the way viewers show it: a JPEG or TIFF photograph
+/// whose EXIF orientation says "rotate" or "mirror" (every phone camera
+/// held upright writes one) is turned upright, so the labels and the
+/// overlay line up with the picture the user sees rather than with the
+/// sensor's rows.
+fn decode_upright(reader: ImageReader<BufReader<File>>) -> ImageResult<DynamicImage> {
+    let mut decoder = reader.into_decoder()?;
+    let orientation = decoder.orientation()?;
+    let mut image = DynamicImage::from_decoder(decoder)?;
+    image.apply_orientation(orientation);
+    Ok(image)
+}
+
 pub(crate) fn image_error(path: &Path, e: ImageError) -> IoError {
     match e {
         ImageError::Unsupported(u) => IoError::Unsupported {
@@ -656,6 +678,51 @@ mod tests {
         assert_eq!(im.bilinear(-5.0, 100.0), 20.0);
         assert_eq!(im.bilinear(4.0, 3.0), 23.0);
         assert_eq!(im.bilinear(f64::NAN, 0.5), 0.0);
+    }
+
+    /// A big-endian EXIF block with one entry: Orientation (tag 0x0112) = `value`.
+    fn exif_orientation(value: u16) -> Vec<u8> {
+        let mut exif = b"MM\0\x2a\0\0\0\x08\0\x01\x01\x12\0\x03\0\0\0\x01".to_vec();
+        exif.extend_from_slice(&value.to_be_bytes());
+        exif.extend_from_slice(&[0, 0, 0, 0, 0, 0]);
+        exif
+    }
+
+    #[test]
+    fn jpeg_exif_orientation_is_applied() {
+        use image::ImageEncoder;
+        let dir = tempfile::tempdir().unwrap();
+        // 16 × 8 sensor rows: the left half dark, the right half bright.
+        let pixels: Vec<u8> = (0..8 * 16)
+            .map(|i| if i % 16 < 8 { 0 } else { 255 })
+            .collect();
+        let save = |name: &str, orientation: Option<u16>| {
+            let path = dir.path().join(name);
+            let mut bytes = Vec::new();
+            let mut encoder = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 100);
+            if let Some(value) = orientation {
+                encoder.set_exif_metadata(exif_orientation(value)).unwrap();
+            }
+            encoder
+                .write_image(&pixels, 16, 8, image::ExtendedColorType::L8)
+                .unwrap();
+            std::fs::write(&path, bytes).unwrap();
+            path
+        };
+        let plain = Image2::load(save("plain.jpg", None)).unwrap();
+        assert_eq!(plain.dims(), (16, 8));
+        assert!(plain.get(2, 4) < 0.1 && plain.get(13, 4) > 0.9);
+        // 6: the camera was turned, the picture is the sensor rotated 90°
+        // clockwise: 8 wide, 16 high, the bright half at the bottom.
+        let turned = Image2::load(save("turned.jpg", Some(6))).unwrap();
+        assert_eq!(turned.dims(), (8, 16));
+        assert!(turned.get(4, 2) < 0.1 && turned.get(4, 13) > 0.9);
+        let channel = Image2::load_channel(save("turned_c.jpg", Some(6)), Some(0)).unwrap();
+        assert_eq!(channel.dims(), (8, 16));
+        // 3: upside down, the bright half on the left.
+        let upside_down = Image2::load(save("half.jpg", Some(3))).unwrap();
+        assert_eq!(upside_down.dims(), (16, 8));
+        assert!(upside_down.get(2, 4) > 0.9 && upside_down.get(13, 4) < 0.1);
     }
 
     #[test]
