@@ -393,13 +393,20 @@ fn print_summary(report: &dsc_seg::segment::SegmentReport, cells: &str, out: &st
     );
 }
 
-/// On Ctrl-C or SIGTERM: remove every staging directory (waiting for an
-/// output being moved into place), then exit with 130.
+/// On Ctrl-C (SIGINT) or SIGTERM: remove every staging directory (waiting
+/// for an output being moved into place), then exit with 128 + the signal's
+/// number (130, 143), as a shell or a batch scheduler expects.
 fn exit_cleanly_on_interrupt() {
-    let _ = ctrlc::set_handler(|| {
-        let _hold = dsc_seg::staging::remove_all_and_hold();
-        eprintln!("error: interrupted; unfinished outputs removed");
-        std::process::exit(130);
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            let _hold = dsc_seg::staging::remove_all_and_hold();
+            eprintln!("error: interrupted; unfinished outputs removed");
+            std::process::exit(128 + signal);
+        }
     });
 }
 

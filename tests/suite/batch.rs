@@ -249,8 +249,9 @@ fn batch_of_volumes() {
     assert!(!out.join("two_balls/mesh.vtu").exists());
 }
 
-/// Ctrl-C in the middle of a batch and of a single run removes every
-/// staging folder and leaves no half-written output.
+/// Ctrl-C (SIGINT) in the middle of a batch and SIGTERM in the middle of a
+/// single run remove every staging folder and leave no half-written output;
+/// the exit code is 128 + the signal's number, as a shell reports it.
 #[cfg(unix)]
 #[test]
 fn interrupted_runs_leave_no_staging_folders() {
@@ -260,7 +261,7 @@ fn interrupted_runs_leave_no_staging_folders() {
     for i in 0..8 {
         write_disk(&folder, &format!("i{i}.png"), 160, i);
     }
-    for batch in [true, false] {
+    for (batch, signal, code) in [(true, "-INT", 130), (false, "-TERM", 143)] {
         let out = d.path().join(format!("out_{batch}"));
         let mut cmd = bin();
         cmd.arg("segment").arg("--quiet").arg("--out").arg(&out);
@@ -276,19 +277,19 @@ fn interrupted_runs_leave_no_staging_folders() {
             std::thread::sleep(std::time::Duration::from_millis(2));
         }
         let kill = std::process::Command::new("kill")
-            .args(["-INT", &child.id().to_string()])
+            .args([signal, &child.id().to_string()])
             .status()
             .unwrap();
         assert!(kill.success());
         let status = child.wait().unwrap();
-        if !batch && status.code() == Some(130) {
+        if !batch && status.code() == Some(code) {
             // The run created --out and wrote nothing into it: it is gone.
             assert!(!out.exists(), "an empty {out:?} was left behind");
             continue;
         }
         let left = staging_left(&out);
         assert!(left.is_empty(), "batch {batch}: left {left:?}");
-        if status.code() == Some(130) {
+        if status.code() == Some(code) {
             // Every output folder is complete or holds no output at all.
             for e in std::fs::read_dir(&out).unwrap().flatten() {
                 if e.path().is_dir() {
