@@ -25,6 +25,9 @@ pub enum Error {
     /// A command-line value that parses but makes no sense.
     #[error("{0}")]
     Usage(String),
+    /// The caller cancelled the run ([`crate::cancel`]); nothing was produced.
+    #[error("interrupted")]
+    Interrupted,
 }
 
 /// Shorthand for results with [`enum@Error`].

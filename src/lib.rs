@@ -139,6 +139,7 @@
 pub mod batch;
 #[doc(hidden)]
 pub mod bench;
+pub mod cancel;
 pub mod complex;
 pub mod dim;
 pub mod dsc;

@@ -1,15 +1,17 @@
 //! The library's errors as Python exceptions, with the command line's messages.
 
 use dsc_seg::Error;
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyOSError, PyValueError};
 use pyo3::PyErr;
 
-/// File problems become `OSError`; bad arguments and inputs `ValueError`.
+/// File problems become `OSError`; bad arguments and inputs `ValueError`;
+/// a cancelled run `KeyboardInterrupt`.
 pub fn to_py(e: Error) -> PyErr {
     let msg = e.to_string().replace('\n', " ");
     match e {
         Error::Io(_) | Error::OutputDir { .. } => PyOSError::new_err(msg),
         Error::Segment(_) | Error::Usage(_) => PyValueError::new_err(msg),
+        Error::Interrupted => PyKeyboardInterrupt::new_err(msg),
     }
 }
 

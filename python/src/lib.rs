@@ -10,6 +10,7 @@ mod convert;
 mod errors;
 
 use clap::Parser;
+use dsc_seg::cancel;
 use dsc_seg::options::{Segment3dOptions, SegmentOptions};
 use dsc_seg::pipeline::{
     load_image, load_volume, segment_image, segment_volume, with_init_labels, with_init_labels3,
@@ -17,10 +18,18 @@ use dsc_seg::pipeline::{
 };
 use dsc_seg::segmented::{Outputs, Segmented};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::sync::Arc;
+use std::time::Duration;
 
 use crate::errors::{parse_error, to_py};
+
+/// How often a running segmentation looks for Ctrl-C.
+const SIGNAL_CHECK: Duration = Duration::from_millis(50);
 
 /// `segment`'s options in 2D, exactly as `dsc-seg segment` takes them.
 #[derive(Parser, Debug)]
@@ -56,7 +65,9 @@ fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyRes
             let params = o.options.params(2).map_err(to_py)?;
             let params = with_init_labels(params, o.options.init_labels.as_deref(), image.dims())
                 .map_err(to_py)?;
-            py.detach(|| segment_image(&image, params, Provenance::array(), true))
+            interruptible(py, || {
+                segment_image(&image, params, Provenance::array(), true)
+            })
         }
         3 => {
             let o = Options3::try_parse_from(argv).map_err(|e| parse_error(&e))?;
@@ -68,7 +79,7 @@ fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyRes
             let params = with_init_labels3(params, o.options.init_labels.as_deref(), volume.dims())
                 .map_err(to_py)?;
             let surface = o.options.init_surface;
-            py.detach(|| {
+            interruptible(py, || {
                 segment_volume(
                     &volume,
                     params,
@@ -86,7 +97,43 @@ fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyRes
         }
     };
     Ok(Segmentation {
-        inner: inner.map_err(to_py)?,
+        inner: inner?.map_err(to_py)?,
+    })
+}
+
+/// Runs `job` on a thread of its own with the GIL released, looking for a
+/// Python signal every [`SIGNAL_CHECK`]: on Ctrl-C (or a notebook's
+/// "interrupt"), the job stops at its next iteration ([`cancel`]) and the
+/// signal's exception (`KeyboardInterrupt`) is raised, the interpreter alive.
+fn interruptible<T: Send>(py: Python<'_>, job: impl FnOnce() -> T + Send) -> PyResult<T> {
+    let token = Arc::new(AtomicBool::new(false));
+    let (sender, mut receiver) = mpsc::channel();
+    std::thread::scope(|scope| {
+        let worker_token = token.clone();
+        scope.spawn(move || {
+            // (the receiver is gone only after an error, when no one waits)
+            let _ = sender.send(cancel::with_token(worker_token, job));
+        });
+        loop {
+            let (back, waited) = py.detach(move || {
+                let waited = receiver.recv_timeout(SIGNAL_CHECK);
+                (receiver, waited)
+            });
+            receiver = back;
+            match waited {
+                Ok(result) => return Ok(result),
+                Err(RecvTimeoutError::Timeout) => {
+                    if let Err(signal) = py.check_signals() {
+                        token.store(true, Ordering::Relaxed);
+                        return Err(signal);
+                    }
+                }
+                // The worker panicked: the scope re-raises its panic.
+                Err(RecvTimeoutError::Disconnected) => {
+                    return Err(PyRuntimeError::new_err("segmentation thread failed"))
+                }
+            }
+        }
     })
 }
 

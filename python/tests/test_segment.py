@@ -2,6 +2,7 @@
 2D and 3D, dtypes, options as keywords, errors, written outputs, and the GIL
 released during a run."""
 
+import signal
 import sys
 import threading
 import time
@@ -237,6 +238,30 @@ def test_the_gil_is_released_during_a_run():
         thread.join()
         sys.setswitchinterval(old)
     assert during > 5, during
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to one's own process")
+def test_ctrl_c_interrupts_a_run_and_the_interpreter_goes_on():
+    """SIGINT (Ctrl-C, a notebook's interrupt) during a long 3D run raises
+    KeyboardInterrupt soon after, not at the run's end; the next call works."""
+    volume, _ = dsc_seg.phantom("four_phase", size=64, noise=0.2, ndim=3)
+    uninterrupted = time.perf_counter()
+    dsc_seg.segment(volume, phases=4, max_iterations=12)
+    uninterrupted = time.perf_counter() - uninterrupted
+
+    timer = threading.Timer(0.2, signal.raise_signal, (signal.SIGINT,))
+    start = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        dsc_seg.segment(volume, phases=4, max_iterations=100000)
+    interrupted = time.perf_counter() - start
+    timer.join()
+    # Stopped within a few iterations of the signal, long before a run to
+    # convergence (a few seconds at least) would end.
+    assert interrupted < 0.2 + uninterrupted, (interrupted, uninterrupted)
+
+    image, truth = dsc_seg.phantom("two_phase", size=64)
+    assert (dsc_seg.segment(image, phases=2).labels == truth).mean() > 0.9
 
 
 def test_a_name_of_both_phantom_commands_is_the_image_unless_ndim_3():

@@ -328,7 +328,7 @@ pub(crate) fn segment_image_then<T>(
     let mut seg = Segmentation::<D2>::new(view, params.clone()).map_err(file_values)?;
     let ready = ready()?;
 
-    let mut report = run_with_progress(&mut seg, params.max_iterations, quiet);
+    let mut report = run_with_progress(&mut seg, params.max_iterations, quiet)?;
     report
         .warnings
         .extend(phase_choice.iter().flat_map(PhaseChoice::warnings));

@@ -273,7 +273,7 @@ pub(crate) fn segment_volume_then<T>(
         Some(path) => surface_segmentation(view, params.clone(), path)?,
     };
     let ready = ready()?;
-    let report = run_with_progress(&mut seg, params.max_iterations, quiet);
+    let report = run_with_progress(&mut seg, params.max_iterations, quiet)?;
     let segment_seconds = t_seg.elapsed().as_secs_f64();
 
     let labels = seg.label_image();

@@ -228,12 +228,13 @@ impl<'a> RunReport<'a> {
 }
 
 /// Runs a segmentation to its end with a progress bar on stderr (hidden when
-/// `quiet`), shared by the 2D and 3D pipelines.
+/// `quiet`), shared by the 2D and 3D pipelines; [`Error::Interrupted`] when
+/// the caller cancelled it ([`crate::cancel`]).
 pub(crate) fn run_with_progress<K: Raster>(
     seg: &mut Segmentation<'_, K>,
     max_iterations: usize,
     quiet: bool,
-) -> SegmentReport {
+) -> Result<SegmentReport> {
     let bar = if quiet {
         ProgressBar::hidden()
     } else {
@@ -254,7 +255,10 @@ pub(crate) fn run_with_progress<K: Raster>(
         ));
     });
     bar.finish_and_clear();
-    report
+    if crate::cancel::requested() {
+        return Err(Error::Interrupted);
+    }
+    Ok(report)
 }
 
 /// Checks the name, side and noise of a phantom `source` (2D, or 3D with

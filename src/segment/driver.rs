@@ -1151,7 +1151,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     ) -> SegmentReport {
         let t0 = Instant::now();
         let mut stopped = false;
-        while self.history.len() < self.params.max_iterations && !(check_first && self.converged())
+        while self.history.len() < self.params.max_iterations
+            && !(check_first && self.converged())
+            && !crate::cancel::requested()
         {
             let rec = self.step();
             if observe(self, &rec) == Flow::Stop {
