@@ -39,8 +39,13 @@ fn load(array: &Bound<'_, PyAny>, three_d: bool) -> PyResult<Loaded> {
     macro_rules! try_types {
         ($(($t:ty, $sample_type:expr, $loading:expr)),*) => {$(
             if let Ok(a) = array.extract::<PyReadonlyArrayDyn<'_, $t>>() {
-                let raw: Vec<f64> = a.as_array().iter().map(|&s| s as f64).collect();
-                return loaded(a.shape().to_vec(), raw, $sample_type, $loading, three_d);
+                let shape = a.shape().to_vec();
+                let samples = a.as_array();
+                let samples = samples.iter().map(|&s| s as f64);
+                return match $loading {
+                    Unsigned(bits) => Ok(unsigned(shape, samples, bits, $sample_type)),
+                    AsStored => as_stored(shape, samples.collect(), $sample_type, three_d),
+                };
             }
         )*};
     }
@@ -67,36 +72,47 @@ fn load(array: &Bound<'_, PyAny>, three_d: bool) -> PyResult<Loaded> {
     )))
 }
 
-/// `raw` samples of `sample_type` loaded by `loading`.
-fn loaded(
+/// Unsigned `bits`-bit samples divided by the type's maximum, straight to
+/// `f32` (a 256³ uint8 volume never exists as 64-bit floats).
+fn unsigned(
+    shape: Vec<usize>,
+    samples: impl Iterator<Item = f64>,
+    bits: u32,
+    sample_type: SampleType,
+) -> Loaded {
+    let map = IntensityMap::unsigned(bits);
+    let scale = map.scale();
+    Loaded {
+        shape,
+        data: samples.map(|s| (s / scale) as f32).collect(),
+        sample_type,
+        map,
+    }
+}
+
+/// Float and signed or wide samples: kept as they are in 2D (refused where
+/// not finite or where `f32` would round them), stretched by their range in
+/// 3D.
+fn as_stored(
     shape: Vec<usize>,
     raw: Vec<f64>,
     sample_type: SampleType,
-    loading: Loading,
     three_d: bool,
 ) -> PyResult<Loaded> {
-    let (data, map) = match loading {
-        Loading::Unsigned(bits) => {
-            let map = IntensityMap::unsigned(bits);
-            let scale = map.scale();
-            (raw.iter().map(|&s| (s / scale) as f32).collect(), map)
+    let (data, map) = if three_d {
+        min_max_normalise(&raw).map_err(|e| PyValueError::new_err(e.to_string()))?
+    } else {
+        let count = raw.iter().filter(|s| !s.is_finite()).count();
+        if count > 0 {
+            let refused = NonFiniteSamples {
+                count,
+                total: raw.len(),
+            };
+            return Err(PyValueError::new_err(refused.to_string()));
         }
-        Loading::AsStored if three_d => {
-            min_max_normalise(&raw).map_err(|e| PyValueError::new_err(e.to_string()))?
-        }
-        Loading::AsStored => {
-            let count = raw.iter().filter(|s| !s.is_finite()).count();
-            if count > 0 {
-                let refused = NonFiniteSamples {
-                    count,
-                    total: raw.len(),
-                };
-                return Err(PyValueError::new_err(refused.to_string()));
-            }
-            let data = wide_samples_as_f32(raw.iter().copied())
-                .map_err(|reason| PyValueError::new_err(format!("the array: {reason}")))?;
-            (data, IntensityMap::IDENTITY)
-        }
+        let data = wide_samples_as_f32(raw.iter().copied())
+            .map_err(|reason| PyValueError::new_err(format!("the array: {reason}")))?;
+        (data, IntensityMap::IDENTITY)
     };
     Ok(Loaded {
         shape,
