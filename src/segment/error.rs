@@ -39,9 +39,14 @@ pub enum SegmentError {
     /// Eq. (5) is defined for two phases only.
     #[error("the Chan–Vese force (eq. 5) needs exactly 2 phases, not {0}")]
     ChanVeseNeedsTwoPhases(usize),
-    /// A bad initialisation.
+    /// A bad initialisation from the input (a label image that does not fit).
     #[error("initialisation: {0}")]
     Init(String),
+    /// A bad initialisation from an option's value: a disk or ball that is
+    /// not a shape, names no phase or lies outside the image, a start that
+    /// cannot choose the number of phases.
+    #[error("initialisation: {0}")]
+    InitOption(String),
     /// The mesh could not be built.
     #[error("mesh: {0}")]
     Build(#[from] BuildError),
@@ -59,6 +64,7 @@ impl SegmentError {
                 | SegmentError::EdgeLength(..)
                 | SegmentError::Param(..)
                 | SegmentError::ChanVeseNeedsTwoPhases(_)
+                | SegmentError::InitOption(_)
         )
     }
 }

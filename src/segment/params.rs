@@ -402,7 +402,7 @@ impl SegmentParams {
                 return Err(SegmentError::Phases(max));
             }
             if !matches!(self.init, Init::Histogram | Init::Range) {
-                return Err(SegmentError::Init(
+                return Err(SegmentError::InitOption(
                     "choosing the number of phases needs the histogram or range start".into(),
                 ));
             }
@@ -518,17 +518,19 @@ impl SegmentParams {
             Init::Histogram | Init::Range => {}
             Init::Disks(disks) => {
                 if disks.is_empty() {
-                    return Err(SegmentError::Init("at least one disk is needed".into()));
+                    return Err(SegmentError::InitOption(
+                        "at least one disk is needed".into(),
+                    ));
                 }
                 for d in disks {
                     if !(d.x.is_finite() && d.y.is_finite() && d.r.is_finite() && d.r > 0.0) {
-                        return Err(SegmentError::Init(format!(
+                        return Err(SegmentError::InitOption(format!(
                             "disk {},{},{} needs finite numbers and a positive radius",
                             d.x, d.y, d.r
                         )));
                     }
                     if d.phase as usize >= self.phases {
-                        return Err(SegmentError::Init(format!(
+                        return Err(SegmentError::InitOption(format!(
                             "disk phase {} is not below the number of phases {}",
                             d.phase, self.phases
                         )));
@@ -537,17 +539,19 @@ impl SegmentParams {
             }
             Init::Balls(balls) => {
                 if balls.is_empty() {
-                    return Err(SegmentError::Init("at least one ball is needed".into()));
+                    return Err(SegmentError::InitOption(
+                        "at least one ball is needed".into(),
+                    ));
                 }
                 for b in balls {
                     if !(b.centre.iter().all(|x| x.is_finite()) && b.r.is_finite() && b.r > 0.0) {
-                        return Err(SegmentError::Init(format!(
+                        return Err(SegmentError::InitOption(format!(
                             "ball {:?},{} needs finite numbers and a positive radius",
                             b.centre, b.r
                         )));
                     }
                     if b.phase as usize >= self.phases {
-                        return Err(SegmentError::Init(format!(
+                        return Err(SegmentError::InitOption(format!(
                             "ball phase {} is not below the number of phases {}",
                             b.phase, self.phases
                         )));
@@ -594,7 +598,7 @@ impl SegmentParams {
         match &self.init {
             Init::Disks(disks) => {
                 if let Some(d) = disks.iter().find(|d| !overlaps(&[d.x, d.y], d.r)) {
-                    return Err(SegmentError::Init(format!(
+                    return Err(SegmentError::InitOption(format!(
                         "disk {},{},{} lies outside the {}×{} image",
                         d.x, d.y, d.r, extent[0], extent[1]
                     )));
@@ -602,7 +606,7 @@ impl SegmentParams {
             }
             Init::Balls(balls) => {
                 if let Some(b) = balls.iter().find(|b| !overlaps(&b.centre, b.r)) {
-                    return Err(SegmentError::Init(format!(
+                    return Err(SegmentError::InitOption(format!(
                         "ball {},{},{},{} lies outside the volume [0, {}]×[0, {}]×[0, {}]",
                         b.centre[0], b.centre[1], b.centre[2], b.r, extent[0], extent[1], extent[2]
                     )));

@@ -138,6 +138,9 @@ fn bad_option_values_exit_2() {
         &["segment3d", "--phantom-size", "24", "--length-weight", "-1"][..],
         // --jobs matters only to batches, but 0 is refused for one input too.
         &["segment", "--phantom-size", "64", "--jobs", "0"][..],
+        // A start shape outside the image would label nothing.
+        &["segment", "--phantom-size", "64", "--disk", "500,500,10"][..],
+        &["segment3d", "--phantom-size", "24", "--ball", "12,12,12,-2"][..],
     ] {
         let o = run(args, &d.path().join("o"));
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
