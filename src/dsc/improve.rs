@@ -4,7 +4,7 @@ use super::workspace::{RegionBuffers, WalkScratch};
 use super::{DscParams, DscWorkspace, SizingField};
 use crate::complex::{CellId, Complex, Rejection, VertexId};
 use crate::dim::{Dim, D2, D3};
-use crate::ops::{edge_settled, CollapseMode, ImproveMemo, SmoothScratch};
+use crate::ops::{edge_settled, CollapseMode, ImproveMemo, RefusedFlips, SmoothScratch};
 use rayon::prelude::*;
 use serde::Serialize;
 use smallvec::SmallVec;
@@ -160,13 +160,17 @@ impl Connectivity for D3 {
     /// Visits every tet of the region below `low_quality` and tries edge
     /// removal (3-2, 4-4 and larger rings) on its edges, then 2-3 flips on
     /// its facets, off the interface, accepting a flip only when the smallest
-    /// quality of the tets involved increases (at most 4 sweeps).
+    /// quality of the tets involved increases (at most 4 sweeps). A tet
+    /// whose flips `memo` knows were all refused, nothing around it having
+    /// changed since, is not tried again (the same flips result).
     fn improve_connectivity_in(
         complex: &mut Complex<D3>,
         region: &mut Region,
         params: &DscParams,
-        _memo: &mut ImproveMemo,
+        memo: &mut ImproveMemo,
     ) -> usize {
+        let refused = &mut memo.refused_flips;
+        refused.sync(complex, params.low_quality);
         let mut flips = 0;
         let mut poor = complex.take_list();
         for _sweep in 0..4 {
@@ -177,11 +181,19 @@ impl Connectivity for D3 {
                 complex,
                 region.cells(complex),
                 params.low_quality,
+                refused,
                 &mut poor,
             );
             for &c in &poor {
+                // (judged now: a flip earlier in the sweep may have changed
+                // the tets around one refused before it)
+                if refused.still_refused(complex, c) {
+                    continue;
+                }
                 if complex.improve_tet(c, 0.0).is_some() {
                     changed += 1;
+                } else if complex.is_alive(c) {
+                    refused.record(complex, c);
                 }
             }
             flips += changed;
@@ -203,15 +215,21 @@ const PARALLEL_STARS_FROM: usize = 4096;
 const PARALLEL_QUALITY_FROM: usize = 8192;
 
 /// The live cells of `cells` whose quality is below `threshold`, in their
-/// order, into `out` (on rayon's threads for a large region).
+/// order, into `out` (on rayon's threads for a large region). A tet whose
+/// flips `refused` knows to be refused is taken without computing its
+/// quality: it was below the threshold then, and its corners have not moved.
 fn cells_below_quality(
     complex: &Complex<D3>,
     cells: &[CellId],
     threshold: f64,
+    refused: &RefusedFlips,
     out: &mut Vec<CellId>,
 ) {
     out.clear();
-    let poor = |c: &CellId| complex.is_alive(*c) && complex.quality(*c) < threshold;
+    let poor = |c: &CellId| {
+        complex.is_alive(*c)
+            && (refused.still_refused(complex, *c) || complex.quality(*c) < threshold)
+    };
     if cells.len() < PARALLEL_QUALITY_FROM {
         out.extend(cells.iter().copied().filter(poor));
     } else {

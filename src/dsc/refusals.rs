@@ -14,19 +14,19 @@
 //! every change of a star with its move clock ([`Complex::star_changed_at`]),
 //! so a refusal at clock `t` stands while neither star has changed since:
 //! trying again would be refused again. Exact: coarsening does what it did
-//! without the record.
+//! without the record. The flips of 3D mesh improvement are remembered the
+//! same way ([`ImproveMemo`](crate::ops::ImproveMemo)'s refused flips).
 
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::Dim;
+use crate::ops::CellStamps;
 
 /// Per cell: when the collapse of its shortest edge was last refused.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct RefusedCollapses {
     /// Per cell id: the move clock right after the refusal.
-    refused: Vec<Option<u64>>,
-    /// The complex the record is about (its identity and compactions, which
-    /// number its cells) and the collapses' quality and straightness bounds.
-    about: Option<(u64, u64)>,
+    refused: CellStamps,
+    /// The collapses' quality and straightness bounds.
     bounds: [f64; 2],
 }
 
@@ -42,21 +42,16 @@ impl RefusedCollapses {
         min_quality: f64,
         straight_cos: f64,
     ) {
-        let about = Some((complex.identity(), complex.compactions()));
         let bounds = [min_quality, straight_cos];
-        if self.about != about || self.bounds != bounds {
-            self.refused.clear();
-            self.about = about;
-            self.bounds = bounds;
+        if !self.refused.sync(complex) && self.bounds != bounds {
+            self.refused.forget();
         }
+        self.bounds = bounds;
     }
 
     /// Records that the collapse of `uv`, the shortest edge of `c`, was refused now.
     pub(crate) fn record<K: Dim>(&mut self, complex: &Complex<K>, c: CellId) {
-        if c.index() >= self.refused.len() {
-            self.refused.resize(c.index() + 1, None);
-        }
-        self.refused[c.index()] = Some(complex.move_clock());
+        self.refused.record(complex, c);
     }
 
     /// Whether the collapse of `uv`, the shortest edge of `c`, was refused
@@ -70,32 +65,13 @@ impl RefusedCollapses {
         (u, v): (VertexId, VertexId),
     ) -> bool {
         self.refused
-            .get(c.index())
-            .copied()
-            .flatten()
+            .get(c)
             .is_some_and(|t| complex.star_changed_at(u) <= t && complex.star_changed_at(v) <= t)
     }
 
     /// Carries the record through the compaction `complex` just made (its
     /// cell map), so that it holds across deforms.
     pub(crate) fn follow_compaction<K: Dim>(&mut self, complex: &Complex<K>) {
-        if self.about.is_none_or(|(identity, compactions)| {
-            identity != complex.identity() || compactions + 1 != complex.compactions()
-        }) {
-            self.refused.clear();
-            self.about = None;
-            return;
-        }
-        // New ids are dense and in the old ids' order, never above them:
-        // forward copies are safe, and the first `live` entries are written.
-        let map = &complex.last_cell_map()[..self.refused.len().min(complex.last_cell_map().len())];
-        for (old, new) in map.iter().enumerate() {
-            if let Some(new) = new {
-                self.refused[new.index()] = self.refused[old];
-            }
-        }
-        let live = map.iter().flatten().count();
-        self.refused.truncate(live);
-        self.about = Some((complex.identity(), complex.compactions()));
+        self.refused.follow_compaction(complex);
     }
 }

@@ -15,9 +15,9 @@ use crate::ops::{ImproveMemo, SmoothScratch};
 /// What [`Complex::deform_with`](crate::complex::Complex::deform_with) (and,
 /// inside the crate, the improvement it runs) keeps between calls: the
 /// improvement memo ([`ImproveMemo`]) and scratch buffers, whose contents
-/// never outlive a call, and the coarsening collapses the mesh refused,
-/// which do (they hold while the stars involved are unchanged, and are
-/// forgotten when another complex, or a compaction they did not follow,
+/// never outlive a call, and the coarsening collapses and 3D flips the mesh
+/// refused, which do (they hold while the stars involved are unchanged, and
+/// are forgotten when another complex, or a compaction they did not follow,
 /// comes). `deform_with` starts by forgetting the memo, so any complex may
 /// use the workspace there; improvement calls in a row must be about one
 /// complex (the memo's verdicts are about its cells and vertices).

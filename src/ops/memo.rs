@@ -14,10 +14,13 @@
 //! no walk of the star is needed to skip it. Valid until the complex is
 //! compacted (the ids change), so one memo serves one `deform` call (a
 //! kept [`DscWorkspace`](crate::dsc::DscWorkspace) forgets it when the next
-//! call starts, keeping only the arrays' capacity).
+//! call starts, keeping only the arrays' capacity). The one exception is
+//! the 3D flips' refusals ([`RefusedFlips`]), which follow the compactions
+//! and so hold across calls.
 
+use super::CellStamps;
 use crate::complex::{CellId, Complex, VertexId};
-use crate::dim::{Dim, D2};
+use crate::dim::{Dim, D2, D3};
 
 /// A verdict: at move clock `clock`, when the cells alive had ids below `cells_below`.
 #[derive(Clone, Copy, Debug)]
@@ -35,6 +38,9 @@ pub struct ImproveMemo {
     sound: Vec<Option<u64>>,
     /// Per cell (2D): when all of its edges were last found not to flip.
     settled: Vec<Option<Stamp>>,
+    /// Per tet (3D): when all of its flips were last refused; kept across
+    /// calls (not forgotten by [`forget`](Self::forget)).
+    pub(crate) refused_flips: RefusedFlips,
     /// What the verdicts were given: the complex's compactions (the ids)
     /// and relabellings (the flip verdicts), the degenerate-cell thresholds
     /// (the `sound` verdicts).
@@ -64,7 +70,9 @@ impl ImproveMemo {
         }
     }
 
-    /// Forgets every verdict (keeps the arrays' capacity).
+    /// Forgets every verdict given in this call (keeps the arrays'
+    /// capacity). The refused flips, which check the complex they are
+    /// about themselves, stay.
     pub fn forget(&mut self) {
         self.kept.clear();
         self.sound.clear();
@@ -136,6 +144,64 @@ impl ImproveMemo {
     #[inline]
     pub(crate) fn settled_cell(&self, complex: &Complex<D2>, c: CellId) -> Option<Stamp> {
         get(&self.settled, c.index()).filter(|&stamp| unchanged_since(complex, c, stamp))
+    }
+}
+
+/// Per tet: when every flip of [`Complex::improve_tet`](crate::complex::Complex::improve_tet) was last refused.
+///
+/// Most tets below the flip threshold lie on an interface, where no flip
+/// may change the cells, and each improvement of the band tries all ten
+/// of their flips again, several times per deform. Whether they are refused
+/// depends on the tets around the tet's edges and across its facets, their
+/// corner positions and labels: all within the stars of its four corners.
+/// So a refusal at clock `t` stands while no corner's star has changed
+/// since ([`Complex::star_changed_at`]) and no label has
+/// ([`Complex::relabels`]). Exact: the improvement flips what it flips
+/// without the record.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RefusedFlips {
+    refused: CellStamps,
+    relabels: u64,
+    /// The quality below which the tets were tried (a tet recorded was
+    /// below it, and stays so while its corners stay).
+    low_quality: f64,
+}
+
+impl RefusedFlips {
+    /// Forgets what does not hold for `complex` and tets tried below
+    /// `low_quality`: everything if it is another complex, was renumbered
+    /// by a compaction the record did not follow, a label changed or the
+    /// threshold did.
+    pub(crate) fn sync(&mut self, complex: &Complex<D3>, low_quality: f64) {
+        if !self.refused.sync(complex)
+            && (self.relabels != complex.relabels() || self.low_quality != low_quality)
+        {
+            self.refused.forget();
+        }
+        self.relabels = complex.relabels();
+        self.low_quality = low_quality;
+    }
+
+    /// Records that every flip of `c` was refused now.
+    pub(crate) fn record(&mut self, complex: &Complex<D3>, c: CellId) {
+        self.refused.record(complex, c);
+    }
+
+    /// Whether every flip of `c` was refused and no corner's star has
+    /// changed since: trying again would be refused again.
+    #[inline]
+    pub(crate) fn still_refused(&self, complex: &Complex<D3>, c: CellId) -> bool {
+        self.refused.get(c).is_some_and(|t| {
+            complex
+                .cell(c)
+                .iter()
+                .all(|&w| complex.star_changed_at(w) <= t)
+        })
+    }
+
+    /// Carries the record through the compaction `complex` just made.
+    pub(crate) fn follow_compaction<K: Dim>(&mut self, complex: &Complex<K>) {
+        self.refused.follow_compaction(complex);
     }
 }
 
@@ -270,5 +336,97 @@ mod tests {
             !all.iter().any(|&v| memo.still_kept(&mesh, v)),
             "the ids changed"
         );
+    }
+
+    /// The 3D flip sweeps over every tet, each tet below `low_quality`
+    /// tried afresh: what [`Connectivity::improve_connectivity_in`] does
+    /// for `D3` without a memo.
+    fn flips_without_memo(mesh: &mut Complex<D3>, low_quality: f64) -> usize {
+        let mut flips = 0;
+        for _sweep in 0..4 {
+            let poor: Vec<CellId> = mesh
+                .cell_ids()
+                .filter(|&c| mesh.quality(c) < low_quality)
+                .collect();
+            let changed = poor
+                .into_iter()
+                .filter(|&c| mesh.improve_tet(c, 0.0).is_some())
+                .count();
+            flips += changed;
+            if changed == 0 {
+                break;
+            }
+        }
+        flips
+    }
+
+    /// 3D flips with one memo kept across rounds of moves, compactions and
+    /// a relabelling (its refused flips follow the compactions) flip
+    /// exactly the tets a fresh improvement flips, leaving the same cells.
+    #[test]
+    fn refused_flips_give_the_flips_of_a_fresh_evaluation() {
+        use nalgebra::Vector3;
+        let l = 4.0;
+        let mut mesh = Complex::<D3>::cuboid([24.0, 20.0, 16.0], l).unwrap();
+        let centre = Vector3::new(12.0, 10.0, 8.0);
+        mesh.label_by(|p| u32::from((p - centre).norm() < 6.0));
+        let mut params = DscParams::new::<D3>(l);
+        // Demanding, so that most tets are tried and many flip.
+        params.low_quality = 0.6;
+        let (mut fresh, mut memoised) = (mesh.clone(), mesh);
+        let mut memo = ImproveMemo::new();
+        let mut star = Vec::new();
+        let (mut total_flips, mut skipped) = (0, 0);
+        for round in 0..8 {
+            for c in [&mut fresh, &mut memoised] {
+                let ids: Vec<VertexId> = c.vertex_ids().collect();
+                for (k, &v) in ids.iter().enumerate() {
+                    if (k + round) % 5 == 0 {
+                        let p = c.position(v);
+                        let d = Vector3::new(
+                            (k as f64).sin(),
+                            (round as f64 + k as f64).cos(),
+                            (0.7 * k as f64).sin(),
+                        );
+                        c.move_towards(v, c.constrain(v, p + d * (0.5 * l)), 1e-4 * l, &mut star);
+                    }
+                }
+                if round == 4 {
+                    let first = c.cell_ids().next().unwrap();
+                    c.set_label(first, 1 - c.label(first));
+                }
+            }
+            // Two passes per round, as an improvement runs them.
+            for _pass in 0..2 {
+                let a = flips_without_memo(&mut fresh, params.low_quality);
+                memo.refused_flips.sync(&memoised, params.low_quality);
+                let known = memoised
+                    .cell_ids()
+                    .filter(|&c| memo.refused_flips.still_refused(&memoised, c))
+                    .count();
+                let b = D3::improve_connectivity_in(
+                    &mut memoised,
+                    &mut Region::everything(),
+                    &params,
+                    &mut memo,
+                );
+                assert_eq!(a, b, "round {round}: flips");
+                total_flips += a;
+                skipped += known;
+            }
+            let cells = |c: &Complex<D3>| -> Vec<Vec<VertexId>> {
+                c.cell_ids().map(|x| c.cell(x).to_vec()).collect()
+            };
+            assert_eq!(cells(&fresh), cells(&memoised), "round {round}");
+            // Every other round renumbers, as a deform's end does.
+            if round % 2 == 1 {
+                fresh.compact_in_place();
+                memoised.compact_in_place();
+                memo.refused_flips.follow_compaction(&memoised);
+            }
+            assert!(memoised.validate().is_empty(), "round {round}");
+        }
+        assert!(total_flips > 20, "{total_flips} flips: too few to test");
+        assert!(skipped > 100, "{skipped} refusals reused: too few to test");
     }
 }
