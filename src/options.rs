@@ -36,11 +36,22 @@ pub struct EvolutionArgs {
     /// 0.3 in 3D with three or more phases].
     #[arg(long, allow_hyphen_values = true)]
     pub step_fraction: Option<f64>,
+    /// Largest per-vertex gain of the step: a vertex that keeps moving the
+    /// same way has its step multiplied by up to G (never beyond
+    /// --step-fraction·L); 1 gives every vertex the one step [default: 3 in
+    /// 2D, 1 in 3D].
+    #[arg(long, value_name = "G", allow_hyphen_values = true)]
+    pub step_gain: Option<f64>,
     /// Vertices asked to move less than this fraction of L in an iteration
     /// stay where they are (the noise's jitter about a settled interface)
     /// [default: 0 in 2D, 0.02 in 3D].
     #[arg(long, allow_hyphen_values = true)]
     pub min_move: Option<f64>,
+    /// Also converged once the energy has not reached a new low (by 3·10⁻⁴
+    /// of itself) for N iterations; 0: only the displacement rule [default: 5
+    /// in 2D, 10 in 3D and with --adaptive].
+    #[arg(long, value_name = "N")]
+    pub converge_plateau: Option<usize>,
     /// A flip round that relabels fewer than this fraction of the cells is
     /// quiet: it does not restart the energy plateau of the stopping rule,
     /// and one that comes on a plateau half as long ends the run (0: every
@@ -97,12 +108,16 @@ impl EvolutionArgs {
         set(&mut p.rigidity, self.rigidity);
         set(&mut p.elasticity, self.elasticity);
         set(&mut p.step_fraction, self.step_fraction);
+        set(&mut p.step_gain, self.step_gain);
         set(&mut p.min_move, self.min_move);
         set(&mut p.quiet_round_fraction, self.quiet_round_fraction);
         set(&mut p.length_weight, self.length_weight);
         p.flip_interval = self.flip_interval.unwrap_or(p.flip_interval);
         if self.adaptive || self.min_edge_length.is_some() || self.max_edge_length.is_some() {
             p.use_adaptive_mesh();
+        }
+        if let Some(n) = self.converge_plateau {
+            p.converge_plateau = (n > 0).then_some(n);
         }
         p.sizing.min_edge_length = self.min_edge_length.or(p.sizing.min_edge_length);
         p.sizing.max_edge_length = self.max_edge_length.or(p.sizing.max_edge_length);

@@ -1092,13 +1092,18 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     }
 
     /// Whether the stopping rule (displacement or energy plateau, or a quiet
-    /// flip round on a plateau) is met.
+    /// flip round on a plateau) is met. The plateau counts only while the
+    /// label flips are on: without them the interfaces travel the whole way
+    /// from their start (the paper's single-region evolutions, a model
+    /// pushing them), and a front crossing a region lowers the energy by
+    /// less per iteration than the plateau's 3·10⁻⁴ of it.
     fn stopping_rule_met(&self) -> bool {
-        let on_plateau = self
-            .params
-            .converge_plateau
-            .is_some_and(|n| self.since_new_low >= n)
-            || self.quiet_round_on_plateau;
+        let on_plateau = self.params.label_flips
+            && (self
+                .params
+                .converge_plateau
+                .is_some_and(|n| self.since_new_low >= n)
+                || self.quiet_round_on_plateau);
         self.quiet_iterations >= self.params.converge_iterations
             || (on_plateau && self.sizing_settled())
     }

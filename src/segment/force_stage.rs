@@ -4,6 +4,7 @@
 use super::model::{ForceTerm, IterationState, TermKind};
 use super::normal_motion::across_interface;
 use super::raster::Raster;
+use super::step_gain::StepGains;
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::Point;
 use crate::dsc::Destinations;
@@ -29,6 +30,8 @@ pub(crate) struct ForceStage<K: Raster> {
     pub dest: Destinations<K>,
     /// Scratch space of [`across_interface`].
     star: Vec<CellId>,
+    /// Per-vertex gains of the step.
+    gains: StepGains<K::Point>,
 }
 
 /// The largest displacement of a force evaluation's destinations, in pixels.
@@ -52,11 +55,14 @@ impl<K: Raster> ForceStage<K> {
             term_kinds: Vec::new(),
             dest: Destinations::new(complex),
             star: Vec::new(),
+            gains: StepGains::new(),
         }
     }
 
     /// Computes every term's forces on `complex` and fills the destinations
-    /// with a step of `step`·L; returns the largest displacements.
+    /// with a step of `step`·L, each vertex's multiplied by its gain
+    /// ([`StepGains`], up to [`SegmentParams::step_gain`](super::params::SegmentParams::step_gain));
+    /// returns the largest displacements.
     pub fn run(
         &mut self,
         terms: &mut [Box<dyn ForceTerm<K>>],
@@ -84,6 +90,12 @@ impl<K: Raster> ForceStage<K> {
         let kinds = std::mem::take(&mut self.term_kinds);
         self.add_smoothing(terms, &kinds, scale, l);
         self.term_kinds = kinds;
+        // (no vertex further than the largest force's `step`·L)
+        let max_gain = state.params.step_gain;
+        if max_gain > 1.0 {
+            self.gains
+                .apply(complex, &mut self.displacement, max_gain, step * l);
+        }
         self.set_destinations(complex, state.params.min_move * l)
     }
 

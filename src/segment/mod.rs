@@ -74,6 +74,7 @@ pub mod raster;
 pub mod relaxed_length;
 pub mod reseed;
 pub mod smoothing;
+mod step_gain;
 pub mod thresholds;
 
 pub use driver::{IterationRecord, SegmentReport, Segmentation, StageTimes, StopReason};

@@ -11,6 +11,20 @@ pub const MAX_PHASES: usize = 64;
 /// not reached a new low for this many iterations.
 pub const PLATEAU_ITERATIONS: usize = 10;
 
+/// The 2D default of [`SegmentParams::converge_plateau`]: with the step
+/// gains ([`STEP_GAIN_2D`]) the interfaces are in place within a few
+/// iterations of the energy's last new low; on the ten two- and four-phase
+/// benchmark images the runs take 11–21 iterations instead of 21–43 at the
+/// same Dice (within 0.0004) (`benches/RESULTS.md`, "Speed, 2D").
+pub const PLATEAU_ITERATIONS_2D: usize = 5;
+
+/// The 2D default of [`SegmentParams::step_gain`].
+pub const STEP_GAIN_2D: f64 = 3.0;
+
+/// Largest accepted [`SegmentParams::step_gain`] (a displacement is never
+/// longer than the step anyway).
+pub const MAX_STEP_GAIN: f64 = 100.0;
+
 /// The 2D default of [`SegmentParams::converge_pixels`]: a run has converged
 /// once no vertex moves the interface across itself by more than a
 /// twentieth of a pixel per iteration.
@@ -203,6 +217,17 @@ pub struct SegmentParams {
     /// the energy has not reached a new low for 10 iterations, so that noisy
     /// runs settle. Evidence: `docs/parameters.md`.
     pub step_fraction: f64,
+    /// Largest per-vertex gain of the step (`segment/step_gain.rs`):
+    /// a vertex whose displacement points the same way as in the previous
+    /// iteration has its step multiplied by a gain that grows by 1.5 per
+    /// such iteration up to this value, and falls back to 1 when it turns;
+    /// no vertex moves further than `step_fraction`·L. 1: off, one step for
+    /// every vertex. Default 3 in 2D (corners and the ends of thin bars,
+    /// where the region force and the bending term nearly cancel, crept by
+    /// 0.05–0.1 px per iteration for the last 15–20 iterations of a run);
+    /// 1 in 3D ([`new_3d`](Self::new_3d)). Evidence: `docs/parameters.md`.
+    #[serde(default = "unit_gain")]
+    pub step_gain: f64,
     /// A vertex whose displacement of the iteration is below this fraction
     /// of L stays where it is: below the motion the stopping rule counts
     /// (`converge_displacement`), such moves are the noise's jitter about a
@@ -228,8 +253,13 @@ pub struct SegmentParams {
     /// for this many iterations in a row: the labelling and the interfaces
     /// no longer change the energy meaningfully, and under noise the largest
     /// displacement of the rule above only falls once the step has been
-    /// halved four times. `None` (2D): that rule alone. 3D: 10 (see
-    /// [`new_3d`](Self::new_3d)).
+    /// halved four times. Only while the label flips are on: without them
+    /// the interfaces travel from their start, lowering the energy by little
+    /// per iteration. 2D: 5 (with the step gains the interfaces reach
+    /// their place within a few iterations of the energy's last new low, and
+    /// the displacement rule waited for the last creeping corner); adaptive
+    /// runs at least 10 ([`use_adaptive_mesh`](Self::use_adaptive_mesh)). 3D: 10
+    /// (see [`new_3d`](Self::new_3d)).
     #[serde(default)]
     pub converge_plateau: Option<usize>,
     /// A flip round (see [`flip_interval`](Self::flip_interval)) that
@@ -304,11 +334,12 @@ impl SegmentParams {
             rigidity: 5.0,
             elasticity: 0.0,
             step_fraction: 0.2,
+            step_gain: STEP_GAIN_2D,
             min_move: 0.0,
             converge_displacement: 0.02,
             converge_pixels: Some(CONVERGE_PIXELS),
             converge_iterations: 5,
-            converge_plateau: None,
+            converge_plateau: Some(PLATEAU_ITERATIONS_2D),
             quiet_round_fraction: 0.0,
             length_weight: if phases == 2 { 1.6 } else { 5.5 },
             sample_spacing: 1.0,
@@ -321,15 +352,18 @@ impl SegmentParams {
     }
 
     /// Turns on adaptive resolution with the stopping rules it needs: the
-    /// energy-plateau rule ([`converge_plateau`](Self::converge_plateau), 10
-    /// unless set), as in 3D. In 2D the sizing field also settles
+    /// energy-plateau rule ([`converge_plateau`](Self::converge_plateau), at
+    /// least 10), as in 3D. In 2D the sizing field also settles
     /// ([`SizingParams::settle`]): without both, refinement at blurred
     /// four-phase edges kept the mesh splitting and collapsing cells and the
     /// runs reached the iteration cap (`benches/RESULTS.md`, "Adaptive
     /// resolution").
     pub fn use_adaptive_mesh(&mut self) {
         self.sizing.adaptive = true;
-        self.converge_plateau.get_or_insert(PLATEAU_ITERATIONS);
+        self.converge_plateau = Some(
+            self.converge_plateau
+                .map_or(PLATEAU_ITERATIONS, |n| n.max(PLATEAU_ITERATIONS)),
+        );
     }
 
     /// The defaults for a volume (3D) with `phases` phases: as [`new`](Self::new)
@@ -363,6 +397,7 @@ impl SegmentParams {
             } else {
                 STEP_FRACTION_3D_MULTIPHASE
             },
+            step_gain: 1.0,
             converge_pixels: None,
             converge_plateau: Some(PLATEAU_ITERATIONS),
             quiet_round_fraction: QUIET_ROUND_FRACTION_3D,
@@ -463,6 +498,12 @@ impl SegmentParams {
             self.step_fraction,
             self.step_fraction > 0.0 && self.step_fraction <= 0.5,
             "must lie in (0, 0.5]",
+        )?;
+        check(
+            "step_gain",
+            self.step_gain,
+            (1.0..=MAX_STEP_GAIN).contains(&self.step_gain),
+            "must lie in [1, 100]",
         )?;
         check(
             "min_move",
@@ -659,6 +700,10 @@ impl SegmentParams {
         self.edge_length
             .unwrap_or_else(|| default_edge_length(side, side, self.phases))
     }
+}
+
+fn unit_gain() -> f64 {
+    1.0
 }
 
 fn one() -> usize {
