@@ -1,17 +1,22 @@
 //! Prints, per iteration of a default 3D run on a volume with ground truth,
-//! the energy, the flips, the largest move and the mean Dice of the labels at
-//! that point: what the stopping rule sees against what it is meant to
-//! judge, from one run instead of one run per `--max-iterations N`.
+//! the energy, the flips, the largest move, the step, the cells, the mean
+//! Dice of the labels at that point against the truth and against the
+//! previous iteration's labels: what the stopping rule sees against what it
+//! is meant to judge, from one run instead of one run per
+//! `--max-iterations N`, and whether the labels still move when it stops.
 //!
-//! `cargo run --release --example dice_trajectory -- VOLUME TRUTH PHASES [EVERY] [AFTER] [--no-coarse-pass]`
+//! `cargo run --release --example dice_trajectory -- VOLUME TRUTH PHASES [EVERY] [AFTER] [--no-coarse-pass] [--dump DIR]`
 //!
 //! `TRUTH` is a label volume of the same size (any distinct values, one per
 //! phase; phases are matched to labels by the best of all pairings). The Dice
-//! is scored every `EVERY` iterations (default 1) and at every flip round;
-//! with `AFTER` the run goes on that many iterations past the stopping rule
-//! (the fine finish, if any, never begins then). The iterations listed are
-//! those at full resolution, after the coarse pass where the default runs
-//! one (`SegmentParams::coarse_pass`); `--no-coarse-pass` runs without it.
+//! against the truth is scored every `EVERY` iterations (default 1) and at
+//! every flip round; with `AFTER` the run goes on that many iterations past
+//! convergence (the stopping rule and the fine finish, if any). The
+//! iterations listed are those at full resolution, after the coarse pass
+//! where the default runs one (`SegmentParams::coarse_pass`);
+//! `--no-coarse-pass` runs without it. `--dump DIR` writes each iteration's
+//! labels to `DIR/labels_NNN.u8` (one byte per voxel, x fastest), to
+//! compare two runs iteration by iteration.
 
 use dsc_seg::dim::D3;
 use dsc_seg::io::volume::Volume;
@@ -79,8 +84,13 @@ fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
     let no_coarse_pass = args.iter().any(|a| a == "--no-coarse-pass");
     args.retain(|a| a != "--no-coarse-pass");
+    let dump = args.iter().position(|a| a == "--dump").map(|i| {
+        let dir = args.remove(i + 1);
+        args.remove(i);
+        dir
+    });
     if args.len() < 3 {
-        eprintln!("usage: dice_trajectory VOLUME TRUTH PHASES [EVERY] [AFTER]");
+        eprintln!("usage: dice_trajectory VOLUME TRUTH PHASES [EVERY] [AFTER] [--no-coarse-pass] [--dump DIR]");
         std::process::exit(2);
     }
     let volume = Volume::load(&args[0]).expect("volume");
@@ -96,24 +106,35 @@ fn main() {
         .expect("volume view");
     let mut seg = Segmentation::<D3>::new(view, params).expect("segmentation");
     let mut converged_at = None;
-    println!("iteration energy flips max_move cells dice");
+    let mut previous: Option<Vec<u8>> = None;
+    println!("iteration energy flips max_move step cells dice dice_previous");
     seg.run_until(|s, r| {
         let flip_round = (r.iteration - 1) % flip_interval == 0;
+        let labels = s.label_image();
         let dice = if r.iteration % every == 0 || flip_round || s.converged() {
-            format!("{:.4}", matched_mean_dice(&s.label_image(), &truth, phases))
+            format!("{:.4}", matched_mean_dice(&labels, &truth, phases))
         } else {
             "-".into()
         };
+        let dice_previous = previous.as_ref().map_or("-".into(), |p| {
+            format!("{:.4}", matched_mean_dice(&labels, p, phases))
+        });
+        if let Some(dir) = &dump {
+            std::fs::write(format!("{dir}/labels_{:03}.u8", r.iteration), &labels).expect("dump");
+        }
         println!(
-            "{} {:.3} {} {:.4} {} {}{}",
+            "{} {:.3} {} {:.4} {:.4} {} {} {}{}",
             r.iteration,
             r.energy,
             r.flips,
             r.max_displacement_across,
+            s.step_fraction(),
             r.cells,
             dice,
+            dice_previous,
             if s.converged() { " converged" } else { "" }
         );
+        previous = Some(labels);
         if s.converged() && converged_at.is_none() {
             converged_at = Some(r.iteration);
         }
