@@ -174,7 +174,8 @@ pub struct SegmentReport {
     pub length_weight_abs: f64,
     /// The rigidity β the bending term used: in 2D the parameter weighed
     /// against the image's noise ([`contrast_rigidity`]); `None` without a
-    /// rigidity term.
+    /// rigidity term. A fine finish may multiply it for its own iterations
+    /// ([`Finish::rigidity_factor`](super::adaptive::Finish::rigidity_factor)).
     pub rigidity: Option<f64>,
     /// The standard deviation, in pixels, of the Gaussian the image the
     /// region force samples was smoothed with (2D on the uniform mesh, from
@@ -270,6 +271,9 @@ pub struct Segmentation<'a, K: Raster> {
     /// Iterations of the fine finish still to run (`None`: not begun; see
     /// [`Finish`](super::adaptive::Finish)).
     finish_left: Option<usize>,
+    /// The run's rigidity β while the finish raises it
+    /// ([`Finish::rigidity_factor`](super::adaptive::Finish::rigidity_factor)).
+    rigidity_before_finish: Option<f64>,
     /// What the coarse pass that gave the start mesh did, if one ran.
     coarse_pass: Option<CoarsePassSummary>,
 }
@@ -486,6 +490,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             since_new_low: 0,
             quiet_round_on_plateau: false,
             finish_left: None,
+            rigidity_before_finish: None,
             coarse_pass: None,
         };
         s.step = s.params.step_fraction;
@@ -797,7 +802,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     }
 
     /// Counts down the fine finish, or begins it once the stopping rule is
-    /// met: the next deform refines the interfaces to a fraction of `L`.
+    /// met: the next deform refines the interfaces to a fraction of `L`;
+    /// from the finish's second iteration to its end the bending term
+    /// weighs the finish's multiple of β.
     /// A run that re-seeded a phase stops without it: its phases are not
     /// settled (a phase lost as a band may be lost again), and on a CT-like
     /// volume whose thin fat class ends as a band the finish's flip round
@@ -809,10 +816,36 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         };
         if let Some(left) = &mut self.finish_left {
             *left = left.saturating_sub(1);
+            let left = *left;
+            if left + 1 == finish.iterations {
+                self.raise_rigidity(finish.rigidity_factor);
+            }
+            if left == 0 {
+                self.restore_rigidity();
+            }
         } else if self.stopping_rule_met() && self.reseeds == 0 {
             if let Some(adaptive) = &mut self.adaptive {
                 adaptive.refine_interfaces(finish.interface_fraction * self.dsc.edge_length);
                 self.finish_left = Some(finish.iterations);
+            }
+        }
+    }
+
+    /// Multiplies the bending term's β by `factor` for the finish, keeping
+    /// the run's β to restore after it (the report gives the run's).
+    fn raise_rigidity(&mut self, factor: f64) {
+        if let Some(rigidity) = self.models.force_mut::<Rigidity<K>>() {
+            self.rigidity_before_finish = Some(rigidity.beta);
+            rigidity.beta *= factor;
+        }
+    }
+
+    /// Gives the bending term back the run's β once the finish is over or
+    /// called off.
+    fn restore_rigidity(&mut self) {
+        if let Some(beta) = self.rigidity_before_finish.take() {
+            if let Some(rigidity) = self.models.force_mut::<Rigidity<K>>() {
+                rigidity.beta = beta;
             }
         }
     }
@@ -834,6 +867,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             if let Some(adaptive) = &mut self.adaptive {
                 adaptive.refine_interfaces(self.dsc.edge_length);
             }
+            self.restore_rigidity();
         }
     }
 

@@ -4,11 +4,13 @@
 use crate::common::assert_valid;
 use dsc_seg::complex::Complex;
 use dsc_seg::dim::{D2, D3};
-use dsc_seg::phantom::{shapes3d, Phantom2Kind};
+use dsc_seg::phantom::{junctions3d, shapes3d, Phantom2Kind};
 use dsc_seg::pipeline::mean_dice;
 use dsc_seg::segment::adaptive::{AdaptiveSizing, SizingParams};
-use dsc_seg::segment::models::RegionForce;
-use dsc_seg::segment::{ImageView, PhaseStats, Raster, SegmentParams, SegmentReport, Segmentation};
+use dsc_seg::segment::models::{RegionForce, Rigidity};
+use dsc_seg::segment::{
+    Flow, ImageView, PhaseStats, Raster, SegmentParams, SegmentReport, Segmentation,
+};
 
 /// A segmentation whose region force samples the image as it is, as on the
 /// adaptive mesh (the uniform 2D mesh samples it smoothed under noise): the
@@ -204,6 +206,43 @@ fn the_3d_fine_finish_refines_the_interfaces_after_the_stopping_rule() {
         finished_dice > plain_dice - 0.002,
         "Dice {finished_dice} finished, {plain_dice} without"
     );
+}
+
+/// With three or more phases the finish's iterations after its flip round
+/// run with the finish's multiple of the rigidity β, and the run's β is
+/// given back at its end and reported.
+#[test]
+fn the_multiphase_finish_stiffens_the_surface_after_its_flip_round() {
+    let ph = junctions3d::three_phase(48, 0.1, 2);
+    let view = ImageView::new_3d([ph.nx, ph.ny, ph.nz], &ph.image).unwrap();
+    let params = SegmentParams::new_3d(3);
+    let finish = params.sizing.finish.expect("the 3D default finishes");
+    assert!(finish.rigidity_factor > 1.0);
+    let mut seg = Segmentation::<D3>::new(view, params).unwrap();
+    let beta = seg.models().force::<Rigidity<D3>>().unwrap().beta;
+    let mut seen = Vec::new();
+    let report = seg.run_until(|s, _| {
+        seen.push(s.models().force::<Rigidity<D3>>().unwrap().beta);
+        if s.converged() {
+            Flow::Stop
+        } else {
+            Flow::Continue
+        }
+    });
+    assert!(report.converged);
+    assert_eq!(report.rigidity, Some(beta));
+    let stiff: Vec<usize> = (0..seen.len()).filter(|&i| seen[i] != beta).collect();
+    // seen after each iteration: raised after the finish's first, given back after its last
+    let first = seen.len() - finish.iterations;
+    assert_eq!(
+        stiff,
+        (first..seen.len() - 1).collect::<Vec<_>>(),
+        "{seen:?}"
+    );
+    assert!(stiff
+        .iter()
+        .all(|&i| seen[i] == beta * finish.rigidity_factor));
+    assert!(mean_dice(&seg.label_image(), &ph.truth, 3) > 0.95);
 }
 
 /// The fine finish refines the surface, not a band around it: cells with a
