@@ -15,7 +15,7 @@ pub const PLATEAU_ITERATIONS: usize = 10;
 /// gains ([`STEP_GAIN_2D`]) the interfaces are in place within a few
 /// iterations of the energy's last new low; on the ten two- and four-phase
 /// benchmark images the runs take 11–21 iterations instead of 21–43 at the
-/// same Dice (within 0.0004) (`benches/RESULTS.md`, "Speed, 2D").
+/// same Dice (within 0.0004) (`docs/parameters.md`, "Step gain").
 pub const PLATEAU_ITERATIONS_2D: usize = 5;
 
 /// The 2D default of [`SegmentParams::step_gain`].
@@ -253,9 +253,10 @@ pub struct SegmentParams {
     /// for this many iterations in a row: the labelling and the interfaces
     /// no longer change the energy meaningfully, and under noise the largest
     /// displacement of the rule above only falls once the step has been
-    /// halved four times. Only while the label flips are on: without them
+    /// halved four times. Only while the label flips are on (without them
     /// the interfaces travel from their start, lowering the energy by little
-    /// per iteration. 2D: 5 (with the step gains the interfaces reach
+    /// per iteration), and where flips run every iteration only on one that
+    /// flipped nothing. 2D: 5 (with the step gains the interfaces reach
     /// their place within a few iterations of the energy's last new low, and
     /// the displacement rule waited for the last creeping corner); adaptive
     /// runs at least 10 ([`use_adaptive_mesh`](Self::use_adaptive_mesh)). 3D: 10
