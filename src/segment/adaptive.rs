@@ -125,7 +125,8 @@ pub struct SizingParams {
 /// moves changed the
 /// agreement between two encodings by under 0.001; each run rests on a
 /// surface of its own, and a stiffer one at the end rests closer to the
-/// other's ([`Finish::rigidity_factor`]).
+/// other's ([`Finish::rigidity_factor`], not the default: it cost the
+/// brain phantom's folded layers Dice).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Finish {
     /// The interface size of the finish, as a fraction of `L`.
@@ -149,7 +150,11 @@ pub struct Finish {
     /// different paths rest closer together. The first iteration keeps the
     /// run's β: after a flip round its relabelled cells leave jagged
     /// interfaces, which a stiff bending term moved by nearly `L` at once
-    /// (1.45× the CPU time of a 64³ three-phase run).
+    /// (1.45× the CPU time of a 64³ three-phase run). 4 raised the Dice
+    /// against the truth and between encodings on all eight 64³ three-
+    /// and four-phase phantoms but lowered the brain phantom's from 0.9705
+    /// to 0.9668 (benches/RESULTS.md, "Encoding stability, 3D"), so both
+    /// defaults keep 1.
     #[serde(default = "unit_factor")]
     pub rigidity_factor: f64,
 }
@@ -178,24 +183,19 @@ impl Finish {
     };
 
     /// The 3D default for three or more phases: a last flip round, then
-    /// interfaces at `L/2` for 5 iterations, the last 4 with 4 times the
-    /// run's rigidity. The flip round gives back the thin layers of intermediate
+    /// interfaces at `L/2` for 5 iterations. The flip round gives back the thin layers of intermediate
     /// phases that formed along blurred edges since the regular round,
     /// before the finer cells fit them. On the 64³ three-phase phantom the
-    /// 64-level re-encoding then gave the 8-bit run's labels at Dice
+    /// 64-level re-encoding then gives the 8-bit run's labels at Dice
     /// 0.9906–0.9922 (0.9851–0.9882 without the finish), on the four-phase
     /// one 0.9887–0.9899 at σ = 0.1; the Dice against the truth rose by
-    /// 0.0004–0.0082, at 1.5–1.8× the CPU time. The stiffer finish raised
-    /// both on all eight three- and four-phase volumes at 64³ (σ 0.1 and
-    /// 0.2, noise seeds 1 and 2; the Dice against the truth by
-    /// 0.0014–0.0033) at the same CPU time: the four-phase runs agree at
-    /// 0.99 and more at σ = 0.1, at 0.982–0.984 at σ = 0.2
-    /// (benches/RESULTS.md, "Encoding stability, 3D").
+    /// 0.0004–0.0082, at 1.5–1.8× the CPU time (benches/RESULTS.md,
+    /// "Encoding stability, 3D").
     pub const MULTIPHASE: Finish = Finish {
         interface_fraction: 0.5,
         iterations: 5,
         flip_round: true,
-        rigidity_factor: 4.0,
+        rigidity_factor: 1.0,
     };
 
     /// The 3D default finish of a run with `phases` phases.
