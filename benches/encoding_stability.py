@@ -75,10 +75,14 @@ def main():
     ap.add_argument("--noise", type=float, nargs="*", default=[0.1])
     ap.add_argument("--seeds", type=int, nargs="*", default=[2])
     ap.add_argument("--encodings", nargs="*", choices=ENCODINGS, default=ENCODINGS)
+    ap.add_argument("--finish-rigidities", type=float, nargs="*", default=[],
+                    help="also the default with each --finish-rigidity F")
     a = ap.parse_args()
     modes = {m: MODES[m] for m in a.modes}
     for length in a.edge_lengths:
         modes[f"no finish, L = {length:g}"] = ["--no-fine-finish", "--edge-length", str(length)]
+    for factor in a.finish_rigidities:
+        modes[f"finish β ×{factor:g}"] = ["--finish-rigidity", str(factor)]
     os.makedirs(a.out, exist_ok=True)
     print("| volume | mode | re-encoding | Dice vs 8-bit run | Dice vs truth (8-bit run's) |")
     print("|---|---|---|---|---|")

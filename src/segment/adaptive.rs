@@ -183,9 +183,9 @@ impl Finish {
     };
 
     /// The 3D default for three or more phases: a last flip round, then
-    /// interfaces at `L/2` for 5 iterations. The flip round gives back the thin layers of intermediate
-    /// phases that formed along blurred edges since the regular round,
-    /// before the finer cells fit them. On the 64³ three-phase phantom the
+    /// interfaces at `L/2` for 5 iterations. The flip round gives back the
+    /// thin layers of intermediate phases that formed along blurred edges
+    /// since the regular round, before the finer cells fit them. On the 64³ three-phase phantom the
     /// 64-level re-encoding then gives the 8-bit run's labels at Dice
     /// 0.9906–0.9922 (0.9851–0.9882 without the finish), on the four-phase
     /// one 0.9887–0.9899 at σ = 0.1; the Dice against the truth rose by
@@ -320,7 +320,12 @@ impl SizingParams {
             self.residual_sigmas,
             self.residual_sigmas > 0.0,
             positive,
-        )
+        )?;
+        if let Some(finish) = &self.finish {
+            let factor = finish.rigidity_factor;
+            check("finish_rigidity", factor, factor > 0.0, positive)?;
+        }
+        Ok(())
     }
 }
 

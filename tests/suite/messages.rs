@@ -141,6 +141,13 @@ fn bad_option_values_exit_2() {
         // A start shape outside the image would label nothing.
         &["segment", "--phantom-size", "64", "--disk", "500,500,10"][..],
         &["segment3d", "--phantom-size", "24", "--ball", "12,12,12,-2"][..],
+        &[
+            "segment3d",
+            "--phantom-size",
+            "24",
+            "--finish-rigidity",
+            "0",
+        ][..],
     ] {
         let o = run(args, &d.path().join("o"));
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
