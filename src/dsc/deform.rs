@@ -144,7 +144,7 @@ impl<K: Connectivity> Complex<K> {
         self.give_back(star);
         self.compact_in_place();
         ws.refusals.follow_compaction(self);
-        ws.memo.refused_flips.follow_compaction(self);
+        ws.memo.follow_compaction(self);
         (ws.pending, ws.movers, ws.touched) = (pending, movers, touched);
         report
     }

@@ -4,7 +4,7 @@ use super::workspace::{RegionBuffers, WalkScratch};
 use super::{DscParams, DscWorkspace, SizingField};
 use crate::complex::{CellId, Complex, Rejection, VertexId};
 use crate::dim::{Dim, D2, D3};
-use crate::ops::{edge_settled, CollapseMode, ImproveMemo, RefusedFlips, SmoothScratch};
+use crate::ops::{edge_settled, CollapseMode, ImproveMemo, JudgedTet, SmoothScratch};
 use rayon::prelude::*;
 use serde::Serialize;
 use smallvec::SmallVec;
@@ -169,10 +169,11 @@ impl Connectivity for D3 {
         params: &DscParams,
         memo: &mut ImproveMemo,
     ) -> usize {
-        let refused = &mut memo.refused_flips;
-        refused.sync(complex, params.low_quality);
+        memo.refused_flips.sync(complex, params.low_quality);
+        memo.qualities.sync(complex);
         let mut flips = 0;
         let mut poor = complex.take_list();
+        let mut judged = std::mem::take(&mut memo.judged);
         for _sweep in 0..4 {
             let mut changed = 0;
             // (flips move no vertex, so a tet's quality, read before the
@@ -181,9 +182,11 @@ impl Connectivity for D3 {
                 complex,
                 region.cells(complex),
                 params.low_quality,
-                refused,
+                memo,
+                &mut judged,
                 &mut poor,
             );
+            let refused = &mut memo.refused_flips;
             for &c in &poor {
                 // (judged now: a flip earlier in the sweep may have changed
                 // the tets around one refused before it)
@@ -203,6 +206,7 @@ impl Connectivity for D3 {
             region.invalidate();
         }
         complex.give_back(poor);
+        memo.judged = judged;
         flips
     }
 }
@@ -215,25 +219,51 @@ const PARALLEL_STARS_FROM: usize = 4096;
 const PARALLEL_QUALITY_FROM: usize = 8192;
 
 /// The live cells of `cells` whose quality is below `threshold`, in their
-/// order, into `out` (on rayon's threads for a large region). A tet whose
-/// flips `refused` knows to be refused is taken without computing its
-/// quality: it was below the threshold then, and its corners have not moved.
+/// order, into `out` (judged on rayon's threads for a large region). A tet
+/// whose flips `memo` knows to be refused is taken without its quality: it
+/// was below the threshold then, and its corners have not moved. Other
+/// tets' qualities come from `memo` where no corner moved since it recorded
+/// them; those computed now are recorded. `judged` is scratch.
 fn cells_below_quality(
     complex: &Complex<D3>,
     cells: &[CellId],
     threshold: f64,
-    refused: &RefusedFlips,
+    memo: &mut ImproveMemo,
+    judged: &mut Vec<JudgedTet>,
     out: &mut Vec<CellId>,
 ) {
-    out.clear();
-    let poor = |c: &CellId| {
-        complex.is_alive(*c)
-            && (refused.still_refused(complex, *c) || complex.quality(*c) < threshold)
+    let known = &*memo;
+    let judge = |&c: &CellId| -> Option<JudgedTet> {
+        if !complex.is_alive(c) {
+            return None;
+        }
+        Some(if known.refused_flips.still_refused(complex, c) {
+            JudgedTet::Refused(c)
+        } else if let Some(q) = known.qualities.current(complex, c) {
+            JudgedTet::Known(c, q)
+        } else {
+            JudgedTet::Computed(c, complex.quality(c))
+        })
     };
+    judged.clear();
     if cells.len() < PARALLEL_QUALITY_FROM {
-        out.extend(cells.iter().copied().filter(poor));
+        judged.extend(cells.iter().filter_map(judge));
     } else {
-        out.par_extend(cells.par_iter().copied().filter(poor));
+        judged.par_extend(cells.par_iter().filter_map(judge));
+    }
+    out.clear();
+    for &tet in judged.iter() {
+        let (c, poor) = match tet {
+            JudgedTet::Refused(c) => (c, true),
+            JudgedTet::Known(c, q) => (c, q < threshold),
+            JudgedTet::Computed(c, q) => {
+                memo.qualities.record(complex, c, q);
+                (c, q < threshold)
+            }
+        };
+        if poor {
+            out.push(c);
+        }
     }
 }
 

@@ -14,11 +14,12 @@
 //! no walk of the star is needed to skip it. Valid until the complex is
 //! compacted (the ids change), so one memo serves one `deform` call (a
 //! kept [`DscWorkspace`](crate::dsc::DscWorkspace) forgets it when the next
-//! call starts, keeping only the arrays' capacity). The one exception is
-//! the 3D flips' refusals ([`RefusedFlips`]), which follow the compactions
-//! and so hold across calls.
+//! call starts, keeping only the arrays' capacity). The exceptions are the
+//! 3D flips' refusals ([`RefusedFlips`]) and the tet qualities
+//! ([`CellQualities`]), which follow the compactions and so hold across
+//! calls.
 
-use super::CellStamps;
+use super::{CellQualities, CellStamps, JudgedTet};
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::{Dim, D2, D3};
 
@@ -41,6 +42,11 @@ pub struct ImproveMemo {
     /// Per tet (3D): when all of its flips were last refused; kept across
     /// calls (not forgotten by [`forget`](Self::forget)).
     pub(crate) refused_flips: RefusedFlips,
+    /// Per tet (3D): its quality while no corner moves, read by the search
+    /// for tets to flip; kept across calls like the refused flips.
+    pub(crate) qualities: CellQualities,
+    /// Scratch of the search for poor tets (its judgements, in order).
+    pub(crate) judged: Vec<JudgedTet>,
     /// What the verdicts were given: the complex's compactions (the ids)
     /// and relabellings (the flip verdicts), the degenerate-cell thresholds
     /// (the `sound` verdicts).
@@ -71,12 +77,19 @@ impl ImproveMemo {
     }
 
     /// Forgets every verdict given in this call (keeps the arrays'
-    /// capacity). The refused flips, which check the complex they are
-    /// about themselves, stay.
+    /// capacity). The refused flips and the qualities, which check the
+    /// complex they are about themselves, stay.
     pub fn forget(&mut self) {
         self.kept.clear();
         self.sound.clear();
         self.settled.clear();
+    }
+
+    /// Carries the records kept across calls (the refused flips, the
+    /// qualities) through the compaction `complex` just made.
+    pub(crate) fn follow_compaction<K: Dim>(&mut self, complex: &Complex<K>) {
+        self.refused_flips.follow_compaction(complex);
+        self.qualities.follow_compaction(complex);
     }
 
     /// Forgets the degenerate-cell verdicts if they were given under other
@@ -422,7 +435,7 @@ mod tests {
             if round % 2 == 1 {
                 fresh.compact_in_place();
                 memoised.compact_in_place();
-                memo.refused_flips.follow_compaction(&memoised);
+                memo.follow_compaction(&memoised);
             }
             assert!(memoised.validate().is_empty(), "round {round}");
         }

@@ -3,6 +3,7 @@
 //! Every operation either succeeds, leaving a valid complex, or returns a
 //! [`Rejection`](crate::complex::Rejection) and changes nothing.
 
+mod cell_qualities;
 mod cell_stamps;
 mod collapse;
 mod flip2d;
@@ -12,11 +13,11 @@ mod relocate;
 mod smooth;
 mod split;
 
+pub(crate) use cell_qualities::{CellQualities, JudgedTet};
 pub(crate) use cell_stamps::CellStamps;
 pub use collapse::CollapseMode;
 pub use flip3d::{Flip3, MAX_RING};
 pub(crate) use memo::edge_settled;
 pub use memo::ImproveMemo;
-pub(crate) use memo::RefusedFlips;
 pub use relocate::MoveOutcome;
 pub use smooth::SmoothScratch;
