@@ -17,9 +17,10 @@ use super::params::{
 };
 use super::raster::Raster;
 use super::reseed::{any_lost, lost_phases, merge_phase, split_most_structured_phase, LostPhase};
+use super::reseed_trial::{ReseedTrial, RunProgress};
 use super::smoothing::force_smoothing;
 use super::thresholds::smallest_class_gap;
-use crate::complex::Complex;
+use crate::complex::{Complex, Label};
 use crate::dsc::{Destinations, DscParams, DscWorkspace};
 use serde::Serialize;
 use spin_join::SpinHelper;
@@ -188,8 +189,11 @@ pub struct SegmentReport {
     /// histogram split of [`Init::Histogram`](super::params::Init::Histogram), the interval bounds of
     /// [`Init::Range`](super::params::Init::Range); empty for the other initialisations.
     pub initial_thresholds: Vec<f64>,
-    /// Lost phases re-seeded during the run (see [`crate::segment::reseed`]).
+    /// Lost phases re-seeded during the run and kept (see [`crate::segment::reseed`]).
     pub reseeds: usize,
+    /// Re-seeds of phases judged bands that did not lower the energy by the
+    /// next flip round and were undone ([`crate::segment::reseed_trial`]).
+    pub reseeds_undone: usize,
     /// What the user must know about the result: phases lost at the end
     /// (empty, or duplicating another's mean). Empty when all is well.
     pub warnings: Vec<String>,
@@ -255,6 +259,14 @@ pub struct Segmentation<'a, K: Raster> {
     /// band along other phases' edges is measured against.
     initial_range_counts: Vec<u64>,
     reseeds: usize,
+    /// The state before a re-seed of a band, until the next flip round
+    /// judges it ([`super::reseed_trial`]).
+    reseed_trial: Option<ReseedTrial<K>>,
+    /// Band re-seeds undone, and the labels they were of: not re-seeded
+    /// again (a band that then empties is the same lost class, reported at
+    /// the end).
+    reseeds_undone: usize,
+    refused_reseeds: Vec<Label>,
     times: StageTimes,
     history: Vec<IterationRecord>,
     quiet_iterations: usize,
@@ -271,6 +283,9 @@ pub struct Segmentation<'a, K: Raster> {
     /// Iterations of the fine finish still to run (`None`: not begun; see
     /// [`Finish`](super::adaptive::Finish)).
     finish_left: Option<usize>,
+    /// Whether a re-seed called the finish off once it had begun: the run
+    /// then stops on the stopping rule, without a finish.
+    finish_called_off: bool,
     /// The run's rigidity β while the finish raises it
     /// ([`Finish::rigidity_factor`](super::adaptive::Finish::rigidity_factor)).
     rigidity_before_finish: Option<f64>,
@@ -481,6 +496,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             initial_thresholds,
             initial_range_counts,
             reseeds: 0,
+            reseed_trial: None,
+            reseeds_undone: 0,
+            refused_reseeds: Vec::new(),
             times: StageTimes::default(),
             history: Vec::new(),
             quiet_iterations: 0,
@@ -490,6 +508,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             since_new_low: 0,
             quiet_round_on_plateau: false,
             finish_left: None,
+            finish_called_off: false,
             rigidity_before_finish: None,
             coarse_pass: None,
         };
@@ -689,6 +708,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             && ((iteration - 1) % self.params.flip_interval.max(1) == 0
                 && self.finish_left.is_none()
                 || self.finish_flip_round_due());
+        if flips_due {
+            self.judge_reseed_trial();
+        }
         // Most iterations flip nothing: after one that flipped nothing, the
         // rules only check, beside the forces, whether they would flip.
         let mut forces = None;
@@ -805,11 +827,12 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// met: the next deform refines the interfaces to a fraction of `L`;
     /// from the finish's second iteration to its end the bending term
     /// weighs the finish's multiple of β.
-    /// A run that re-seeded a phase stops without it: its phases are not
-    /// settled (a phase lost as a band may be lost again), and on a CT-like
-    /// volume whose thin fat class ends as a band the finish's flip round
-    /// and finer cells emptied a phase outright. No benchmark volume
-    /// re-seeds.
+    /// A run whose finish a re-seed called off stops without one: its
+    /// phases are not settled (a phase lost as a band may be lost again),
+    /// and on a CT-like volume whose thin fat class ends as a band the
+    /// finish's flip round and finer cells emptied a phase outright. A
+    /// re-seed before the finish does not stop it (a start that holds two
+    /// phases in one class re-seeds at the first flip round).
     fn advance_finish(&mut self) {
         let Some(finish) = self.params.sizing.finish else {
             return;
@@ -823,7 +846,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             if left == 0 {
                 self.restore_rigidity();
             }
-        } else if self.stopping_rule_met() && self.reseeds == 0 {
+        } else if self.stopping_rule_met() && !self.finish_called_off && self.reseed_trial.is_none()
+        {
             if let Some(adaptive) = &mut self.adaptive {
                 adaptive.refine_interfaces(finish.interface_fraction * self.dsc.edge_length);
                 self.finish_left = Some(finish.iterations);
@@ -864,6 +888,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// the stopping rule is met again.
     fn cancel_finish(&mut self) {
         if self.finish_left.take().is_some() {
+            self.finish_called_off = true;
             if let Some(adaptive) = &mut self.adaptive {
                 adaptive.refine_interfaces(self.dsc.edge_length);
             }
@@ -966,8 +991,19 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             return 0;
         }
         let t = Instant::now();
+        let lost: Vec<LostPhase> = self
+            .lost_phases()
+            .into_iter()
+            .filter(|l| !self.refused_reseeds.contains(&l.label()))
+            .collect();
+        let bands: Vec<Label> = lost
+            .iter()
+            .filter(|l| matches!(l, LostPhase::Band { .. }))
+            .map(LostPhase::label)
+            .collect();
+        let trial = (!bands.is_empty()).then(|| self.reseed_trial_from_here(bands));
         let mut done = 0;
-        for lost in self.lost_phases() {
+        for lost in lost {
             if self.reseeds >= 2 * self.params.phases {
                 break;
             }
@@ -989,10 +1025,15 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             ) {
                 self.reseeds += 1;
                 done += 1;
+                // The label's initial threshold range is another class's now.
+                if let Some(count) = self.initial_range_counts.get_mut(lost.label() as usize) {
+                    *count = 0;
+                }
             }
             self.phases.update(&self.complex, &self.cells);
         }
         if done > 0 {
+            self.reseed_trial = trial.map(|t| ReseedTrial { reseeds: done, ..t });
             self.nu = self.length_weight();
             self.quiet_iterations = 0;
             self.best_energy = f64::INFINITY;
@@ -1003,6 +1044,76 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
         self.times.flips += t.elapsed().as_secs_f64();
         done
+    }
+
+    /// The state now, before a round of re-seeds that includes the bands
+    /// `bands`, with its energy: what [`judge_reseed_trial`](Self::judge_reseed_trial)
+    /// restores if the re-seeds do not lower the energy.
+    fn reseed_trial_from_here(&self, bands: Vec<Label>) -> ReseedTrial<K> {
+        ReseedTrial {
+            complex: self.complex.clone(),
+            adaptive: self.adaptive.clone(),
+            energy: self.data_energy() + self.nu * self.interface_measure(),
+            length_weight: self.nu,
+            bands,
+            reseeds: 0,
+            initial_range_counts: self.initial_range_counts.clone(),
+            progress: self.progress(),
+        }
+    }
+
+    /// At the flip round after a re-seed of a band (or at the end of the
+    /// run), with the statistics integrated: keeps the re-seeded state if
+    /// its energy is lower than the state's before the re-seed, otherwise
+    /// restores that state, counts the re-seeds undone and does not re-seed
+    /// those bands again ([`super::reseed_trial`]).
+    fn judge_reseed_trial(&mut self) {
+        let Some(trial) = self.reseed_trial.take() else {
+            return;
+        };
+        if trial.improved(self.data_energy(), self.interface_measure()) {
+            return;
+        }
+        self.reseeds -= trial.reseeds;
+        self.reseeds_undone += trial.reseeds;
+        self.refused_reseeds.extend(&trial.bands);
+        self.complex = trial.complex;
+        self.adaptive = trial.adaptive;
+        if self.finish_left.is_none() {
+            // A trial begun in the finish's flip round: the finish is off.
+            if let Some(adaptive) = &mut self.adaptive {
+                adaptive.refine_interfaces(self.dsc.edge_length);
+            }
+        }
+        self.nu = trial.length_weight;
+        self.initial_range_counts = trial.initial_range_counts;
+        self.restore_progress(trial.progress);
+        // The caches are of the re-seeded mesh: start them afresh.
+        self.cell_cache = CellCache::new();
+        self.force = ForceStage::new(&self.complex);
+        self.deform_workspace = DscWorkspace::new();
+        self.integrate();
+    }
+
+    /// The step size and the stopping rule's counters.
+    fn progress(&self) -> RunProgress {
+        RunProgress {
+            step: self.step,
+            best_energy: self.best_energy,
+            stalled: self.stalled,
+            since_new_low: self.since_new_low,
+            quiet_iterations: self.quiet_iterations,
+            quiet_round_on_plateau: self.quiet_round_on_plateau,
+        }
+    }
+
+    fn restore_progress(&mut self, p: RunProgress) {
+        self.step = p.step;
+        self.best_energy = p.best_energy;
+        self.stalled = p.stalled;
+        self.since_new_low = p.since_new_low;
+        self.quiet_iterations = p.quiet_iterations;
+        self.quiet_round_on_plateau = p.quiet_round_on_plateau;
     }
 
     /// The segmentation split into the state every model reads (for force
@@ -1118,11 +1229,20 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// Whether the stopping rule is met and the fine finish, if any, has
     /// run.
     pub fn converged(&self) -> bool {
-        if self.has_finish() {
+        if self.reseed_trial.is_some() {
+            false
+        } else if self.finishes() {
             self.finish_left == Some(0)
         } else {
             self.stopping_rule_met()
         }
+    }
+
+    /// Whether the run ends with its fine finish: adaptive runs with one,
+    /// unless a re-seed called it off (such a run stops on the stopping
+    /// rule, see [`advance_finish`](Self::advance_finish)).
+    fn finishes(&self) -> bool {
+        self.has_finish() && !self.finish_called_off
     }
 
     /// Whether the stopping rule (displacement or energy plateau, or a quiet
@@ -1211,6 +1331,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             }
         }
         self.integrate();
+        self.judge_reseed_trial();
         let final_energy = self.data_energy() + self.nu * self.interface_measure();
         self.times.total = self.times.setup + t0.elapsed().as_secs_f64();
         let converged = self.converged();
@@ -1226,8 +1347,14 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             .lost_phases()
             .iter()
             .map(|l| {
+                let undone = if self.refused_reseeds.contains(&l.label()) {
+                    "; it was a band along the edge between two other phases earlier, \
+                     and re-seeding it raised the energy"
+                } else {
+                    ""
+                };
                 format!(
-                    "{}: the result has fewer than the {} distinct phases asked for (the image may hold fewer)",
+                    "{}{undone}: the result has fewer than the {} distinct phases asked for (the image may hold fewer)",
                     l.describe(&order),
                     self.params.phases
                 )
@@ -1252,6 +1379,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             intensity: self.intensity.clone(),
             initial_thresholds: self.initial_thresholds.clone(),
             reseeds: self.reseeds,
+            reseeds_undone: self.reseeds_undone,
             warnings,
             history: self.history.clone(),
             times: self.times,

@@ -73,6 +73,7 @@ pub mod phase_distance;
 pub mod raster;
 pub mod relaxed_length;
 pub mod reseed;
+pub mod reseed_trial;
 pub mod smoothing;
 mod step_gain;
 pub mod thresholds;

@@ -10,7 +10,8 @@
 //! bands; it then merges a duplicate or a band into its twin and re-seeds the lost label by
 //! splitting the phase whose cells' means hold the most structure beyond
 //! noise ([`split_most_structured_phase`]) at the least-variance threshold of its cell
-//! means, and warns when it cannot.
+//! means, and warns when it cannot. A band's re-seed is kept only if it lowers
+//! the energy by the next flip round ([`super::reseed_trial`]).
 
 use super::integrate::{CellStats, PhaseStats};
 use super::intensity::Histogram;
