@@ -14,7 +14,8 @@
 //! re-seeded state must have a lower Mumford–Shah energy (data plus the
 //! pre-re-seed length weight times the interface measure) than the state
 //! before it, or the driver restores that state and does not re-seed those
-//! phases as bands again ([`ReseedTrial::improved`]).
+//! labels again ([`ReseedTrial::improved`]): a band that then empties is the
+//! same lost class, and the run's warning says so.
 
 use super::adaptive::AdaptiveSizing;
 use super::raster::Raster;
@@ -34,8 +35,8 @@ pub struct ReseedTrial<K: Raster> {
     /// The length weight ν before the re-seed (the re-seed measures it
     /// again from the new means); both states are weighed with it.
     pub length_weight: f64,
-    /// The labels re-seeded as bands: not re-seeded as bands again if the
-    /// trial fails.
+    /// The labels re-seeded as bands: not re-seeded again if the trial
+    /// fails.
     pub bands: Vec<Label>,
     /// Re-seeds the round made.
     pub reseeds: usize,
