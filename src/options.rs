@@ -21,7 +21,9 @@ pub struct EvolutionArgs {
     /// Keep every cell's label: only the interfaces move.
     #[arg(long)]
     pub no_label_flips: bool,
-    /// Try label flips every K iterations [default: 1 in 2D, 20 in 3D].
+    /// Try label flips every K iterations; with K > 1 the second round comes
+    /// earlier, at the first energy plateau (--converge-plateau) [default: 1
+    /// in 2D, 20 in 3D].
     #[arg(long, value_name = "K")]
     pub flip_interval: Option<usize>,
     /// Rigidity weight β of eq. (2). In 2D it is raised in proportion to the
@@ -49,7 +51,7 @@ pub struct EvolutionArgs {
     pub min_move: Option<f64>,
     /// Also converged once the energy has not reached a new low (by 3·10⁻⁴
     /// of itself) for N iterations; 0: only the displacement rule [default: 5
-    /// in 2D, 10 in 3D and with --adaptive].
+    /// in 2D, 7 in 3D, 10 with --adaptive in 2D].
     #[arg(long, value_name = "N")]
     pub converge_plateau: Option<usize>,
     /// A flip round that relabels fewer than this fraction of the cells is

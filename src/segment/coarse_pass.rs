@@ -12,10 +12,14 @@
 //! about a coarse voxel of the data's and only refines and settles them.
 //!
 //! The pass is the whole segmentation (initialisation, flips, re-seeding,
-//! stopping rule) without the fine finish. Its mesh covers the coarse
-//! image's domain, which is the full image's when every side is even (the
-//! coarse voxels twice the size); an odd side is rounded up and the mesh
-//! stretched back ([`Complex::stretch_to`]).
+//! stopping rule) without the fine finish, and it ends at its first quiet
+//! flip round ([`SegmentParams::quiet_round_plateau`] 0): once a round finds
+//! the labels in place, the interfaces are close enough for the run at
+//! full resolution, which moves them on (on the brain-like phantom the
+//! pass's energy still fell slowly through 60 and more iterations). Its
+//! mesh covers the coarse image's domain, which is the full image's when
+//! every side is even (the coarse voxels twice the size); an odd side is
+//! rounded up and the mesh stretched back ([`Complex::stretch_to`]).
 
 use super::driver::Segmentation;
 use super::image::ImageView;
@@ -116,9 +120,10 @@ pub fn applies(params: &SegmentParams, image: &ImageView<'_>) -> bool {
 
 /// Runs the coarse pass: the segmentation of the image at half resolution
 /// with these parameters at `2·L` (`l` the full run's edge length), without
-/// the fine finish. Returns its final mesh on the full image's domain, the
-/// thresholds of its initialisation (in the image's units, as the coarse
-/// samples are means of the image's) and the summary.
+/// the fine finish and ending at its first quiet flip round. Returns its
+/// final mesh on the full image's domain, the thresholds of its
+/// initialisation (in the image's units, as the coarse samples are means of
+/// the image's) and the summary.
 pub fn coarse_mesh<K: Raster>(
     image: &ImageView<'_>,
     params: &SegmentParams,
@@ -131,6 +136,7 @@ pub fn coarse_mesh<K: Raster>(
     coarse.coarse_pass = false;
     coarse.edge_length = Some(2.0 * l);
     coarse.sizing.finish = None;
+    coarse.quiet_round_plateau = Some(0);
     let mut seg = Segmentation::<K>::new(view, coarse)?;
     let report = seg.run(|_| {});
     let mut complex = seg.complex().clone();

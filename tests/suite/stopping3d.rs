@@ -1,6 +1,7 @@
-//! The 3D stopping rule around flip rounds: a round that relabels only a few
-//! noise-sized cells along settled interfaces does not buy a further energy
-//! plateau, and one that comes on a plateau ends the run.
+//! The 3D stopping rule around flip rounds: a plateau reached before the
+//! second flip round brings that round forward, a round that relabels only
+//! a few noise-sized cells along settled interfaces does not buy a further
+//! energy plateau, and one that comes on a plateau ends the run.
 
 use crate::common::assert_valid;
 use dsc_seg::dim::D3;
@@ -8,10 +9,11 @@ use dsc_seg::phantom::shapes3d;
 use dsc_seg::pipeline::mean_dice;
 use dsc_seg::segment::{ImageView, SegmentParams, SegmentReport, Segmentation};
 
-/// On the 32³ torus (σ 0.1) the energy is on a plateau when the flip round
-/// of iteration 21 relabels a few dozen of about 10 000 cells: the default
+/// On the 32³ torus (σ 0.1) the energy reaches its plateau before
+/// iteration 21, the second regular flip round: the settle round comes
+/// right then and relabels a few dozen of about 10 000 cells, so the default
 /// ends the run there (then the fine finish), where counting the round's
-/// energy as a new low ran ten iterations more for the same Dice.
+/// flips as a relabelling ran on for a further plateau at the same Dice.
 #[test]
 fn a_quiet_flip_round_on_a_plateau_ends_a_3d_run() {
     let ph = shapes3d::torus(32, 0.1, 1);
@@ -34,17 +36,27 @@ fn a_quiet_flip_round_on_a_plateau_ends_a_3d_run() {
     let (counted, counted_dice) = run(counted);
     let (quiet, quiet_dice) = run(quiet);
 
-    let round = quiet.history[20].clone();
-    assert_eq!(round.iteration, 21);
+    let settled = quiet.iterations - finish;
+    let round = quiet.history[settled - 1].clone();
+    assert!(
+        round.iteration < 21,
+        "the run settled at {}, the round was not brought forward",
+        round.iteration
+    );
     assert!(
         round.flips > 0 && (round.flips as f64) < 0.01 * round.cells as f64,
-        "the round at 21 flipped {} of {} cells",
+        "the round at {} flipped {} of {} cells",
+        round.iteration,
         round.flips,
         round.cells
     );
-    assert_eq!(quiet.iterations, 21 + finish, "{:?}", quiet.history);
     assert!(
-        counted.iterations >= quiet.iterations + 5,
+        quiet.history[1..settled - 1].iter().all(|r| r.flips == 0),
+        "a round between the first and the settle round: {:?}",
+        quiet.history
+    );
+    assert!(
+        counted.iterations >= quiet.iterations + 3,
         "{} iterations with the round counted, {} without",
         counted.iterations,
         quiet.iterations
@@ -52,5 +64,42 @@ fn a_quiet_flip_round_on_a_plateau_ends_a_3d_run() {
     assert!(
         quiet_dice > counted_dice - 0.002,
         "Dice {quiet_dice} ended at the quiet round, {counted_dice} counting it"
+    );
+}
+
+/// With `quiet_round_plateau` 0 (the coarse pass's) the first quiet flip
+/// round ends the run whatever the energy did before it: on the 32³ torus
+/// the round at 21, with a plateau too long to end the run sooner; with the
+/// default (half the plateau) the run goes on past it.
+#[test]
+fn a_quiet_round_ends_the_run_at_once_with_quiet_round_plateau_0() {
+    let ph = shapes3d::torus(32, 0.1, 1);
+    let view = ImageView::new_3d([ph.nx, ph.ny, ph.nz], &ph.image).unwrap();
+    let run = |quiet_round_plateau: Option<usize>| -> SegmentReport {
+        let mut params = SegmentParams::new_3d(2);
+        params.converge_plateau = Some(50);
+        params.sizing.finish = None;
+        params.quiet_round_plateau = quiet_round_plateau;
+        params.max_iterations = 30;
+        let mut seg = Segmentation::<D3>::new(view, params).unwrap();
+        let report = seg.run(|_| {});
+        assert_valid(seg.complex());
+        report
+    };
+    let at_once = run(Some(0));
+    assert!(at_once.converged);
+    assert_eq!(at_once.iterations, 21, "{:?}", at_once.history);
+    let round = &at_once.history[20];
+    assert!(
+        round.flips > 0 && (round.flips as f64) < 0.01 * round.cells as f64,
+        "the round at 21 flipped {} of {} cells",
+        round.flips,
+        round.cells
+    );
+    let default = run(None);
+    assert!(
+        default.iterations > 21,
+        "the default stopped at {}",
+        default.iterations
     );
 }
