@@ -331,6 +331,7 @@ fn run_batch(
         force: args.force,
         quiet,
     };
+    BATCH_RUNNING.store(true, std::sync::atomic::Ordering::Relaxed);
     let outcome = batch.run()?;
     let failed = outcome.count(Status::Error);
     if !quiet {
@@ -393,6 +394,9 @@ fn print_summary(report: &dsc_seg::segment::SegmentReport, cells: &str, out: &st
     );
 }
 
+/// Set while a batch runs: its interruption keeps the inputs it finished.
+static BATCH_RUNNING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 /// On Ctrl-C (SIGINT) or SIGTERM: remove every staging directory (waiting
 /// for an output being moved into place), then exit with 128 + the signal's
 /// number (130, 143), as a shell or a batch scheduler expects.
@@ -404,7 +408,14 @@ fn exit_cleanly_on_interrupt() {
     std::thread::spawn(move || {
         if let Some(signal) = signals.forever().next() {
             let _hold = dsc_seg::staging::remove_all_and_hold();
-            eprintln!("error: interrupted; unfinished outputs removed");
+            if BATCH_RUNNING.load(std::sync::atomic::Ordering::Relaxed) {
+                eprintln!(
+                    "error: interrupted; unfinished outputs removed, finished inputs kept \
+                     (the same command goes on from there)"
+                );
+            } else {
+                eprintln!("error: interrupted; unfinished outputs removed");
+            }
             std::process::exit(128 + signal);
         }
     });

@@ -270,7 +270,7 @@ fn interrupted_runs_leave_no_staging_folders() {
         } else {
             cmd.args(["--phantom-size", "512", "--max-iterations", "100000"]);
         }
-        let mut child = cmd.spawn().unwrap();
+        let child = cmd.stderr(std::process::Stdio::piped()).spawn().unwrap();
         let started = std::time::Instant::now();
         while staging_left(&out).is_empty() {
             assert!(started.elapsed().as_secs() < 60, "no staging folder seen");
@@ -281,7 +281,17 @@ fn interrupted_runs_leave_no_staging_folders() {
             .status()
             .unwrap();
         assert!(kill.success());
-        let status = child.wait().unwrap();
+        let finished = child.wait_with_output().unwrap();
+        let status = finished.status;
+        let stderr = String::from_utf8_lossy(&finished.stderr);
+        if status.code() == Some(code) {
+            // A batch says that what it finished is kept for the next call.
+            assert_eq!(
+                stderr.contains("finished inputs kept"),
+                batch,
+                "batch {batch}: {stderr}"
+            );
+        }
         if !batch && status.code() == Some(code) {
             // The run created --out and wrote nothing into it: it is gone.
             assert!(!out.exists(), "an empty {out:?} was left behind");
