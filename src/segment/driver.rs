@@ -16,7 +16,9 @@ use super::params::{
     contrast_edge_length, contrast_rigidity, sample_step, smallest_extent, SegmentParams,
 };
 use super::raster::Raster;
-use super::reseed::{any_lost, lost_phases, merge_phase, split_most_structured_phase, LostPhase};
+use super::reseed::{
+    any_lost, lost_phases, merge_phase, split_most_structured_phase, vestiges, LostPhase,
+};
 use super::reseed_trial::{ReseedTrial, RunProgress};
 use super::smoothing::force_smoothing;
 use super::thresholds::smallest_class_gap;
@@ -1028,6 +1030,17 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         .collect()
     }
 
+    /// The phases present in fewer pixels or voxels than one regular cell at
+    /// the edge length holds, and not listed lost already: a result with such
+    /// a vestige of a phase has one phase fewer than its label values say
+    /// (seen on a real brain MRI, where grey matter ended as one voxel), so
+    /// the run warns rather than pass it for one with every phase.
+    fn vestige_phases(&self, listed: &[LostPhase]) -> Vec<LostPhase> {
+        let voxel: f64 = self.image.spacing[..K::N].iter().product();
+        let cell = K::regular_measure(self.dsc.edge_length) / voxel;
+        vestiges(&self.phases.count, cell, listed)
+    }
+
     /// Merges each duplicate phase, and each band along the edge between two
     /// others, into its twin and re-seeds every lost
     /// label by splitting the phase with the most structure beyond noise (at most `2·N`
@@ -1395,8 +1408,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             StopReason::MaxIterations
         };
         let order = self.phase_order();
-        let mut warnings: Vec<String> = self
-            .lost_phases()
+        let mut lost = self.lost_phases();
+        lost.extend(self.vestige_phases(&lost));
+        let mut warnings: Vec<String> = lost
             .iter()
             .map(|l| {
                 let undone = if self.refused_reseeds.contains(&l.label()) {

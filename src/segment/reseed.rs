@@ -44,6 +44,15 @@ pub enum LostPhase {
         /// The bordering phase whose mean is nearer the band's.
         twin: Label,
     },
+    /// The phase holds fewer pixels or voxels than one regular cell at the
+    /// edge length: a label the mesh cannot carry as a region (reported at
+    /// the end of a run, never re-seeded).
+    Vestige {
+        /// The phase.
+        phase: Label,
+        /// Its pixels or voxels.
+        count: u64,
+    },
 }
 
 impl LostPhase {
@@ -52,7 +61,8 @@ impl LostPhase {
         match *self {
             LostPhase::Empty(l)
             | LostPhase::Duplicate { phase: l, .. }
-            | LostPhase::Band { phase: l, .. } => l,
+            | LostPhase::Band { phase: l, .. }
+            | LostPhase::Vestige { phase: l, .. } => l,
         }
     }
 
@@ -82,6 +92,11 @@ impl LostPhase {
                  edge: a thin class of the image may have been lost)",
                 phase(a),
                 phase(b)
+            ),
+            LostPhase::Vestige { phase: l, count } => format!(
+                "phase {} holds only {count} pixels or voxels, fewer than one cell of the \
+                 mesh (a vestige, not a region)",
+                phase(l)
             ),
         }
     }
@@ -133,6 +148,19 @@ pub fn lost_phases(phases: &PhaseStats, tolerance: f64) -> Vec<LostPhase> {
         }
     }
     lost
+}
+
+/// The phases present in fewer pixels or voxels than `cell` (one regular
+/// cell at the edge length, in pixels or voxels) and not in `listed`.
+pub fn vestiges(count: &[u64], cell: f64, listed: &[LostPhase]) -> Vec<LostPhase> {
+    (0..count.len())
+        .filter(|&k| count[k] > 0 && (count[k] as f64) < cell)
+        .filter(|&k| !listed.iter().any(|l| l.label() as usize == k))
+        .map(|k| LostPhase::Vestige {
+            phase: k as Label,
+            count: count[k],
+        })
+        .collect()
 }
 
 /// Gives every cell of phase `from` the label `to`.
@@ -251,6 +279,23 @@ mod tests {
         let text = LostPhase::Empty(1).describe(&[0, 1]);
         assert!(text.contains("phase 1 covers no pixel or voxel"), "{text}");
         assert!(!text.contains("labels.png"), "{text}");
+    }
+
+    /// A phase of one voxel is a vestige where a cell holds more; an empty
+    /// phase is not (it is lost already), nor a phase already listed.
+    #[test]
+    fn phases_smaller_than_a_cell_are_vestiges() {
+        let count = [38_456, 1_694, 70_441, 1];
+        let found = vestiges(&count, 3.2, &[]);
+        assert_eq!(found, vec![LostPhase::Vestige { phase: 3, count: 1 }]);
+        assert!(vestiges(&count, 0.5, &[]).is_empty());
+        assert!(vestiges(&count, 3.2, &[LostPhase::Empty(3)]).is_empty());
+        assert!(vestiges(&[10, 0], 3.2, &[]).is_empty());
+        let text = found[0].describe(&[0, 1, 2, 3]);
+        assert!(
+            text.contains("phase 3 holds only 1 pixels or voxels"),
+            "{text}"
+        );
     }
 
     fn stats(count: &[u64], mean: &[f64]) -> PhaseStats {
