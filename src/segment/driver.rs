@@ -1033,7 +1033,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// The phases present in fewer pixels or voxels than one regular cell at
     /// the edge length holds, and not listed lost already: a result with such
     /// a vestige of a phase has one phase fewer than its label values say
-    /// (seen on a real brain MRI, where grey matter ended as one voxel), so
+    /// (seen on a block of a real brain MRI, where one of four phases ended as one voxel), so
     /// the run warns rather than pass it for one with every phase.
     fn vestige_phases(&self, listed: &[LostPhase]) -> Vec<LostPhase> {
         let voxel: f64 = self.image.spacing[..K::N].iter().product();
