@@ -1,5 +1,6 @@
 //! The iteration driver: integrate, flip, compute forces, deform, check convergence.
 
+use super::absorbed::absorbed_phases;
 use super::adaptive::{AdaptiveSizing, Sizes};
 use super::band_phase::{band_phases, range_counts, VoxelSize};
 use super::coarse_pass::{self, CoarsePassSummary};
@@ -1041,6 +1042,31 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         vestiges(&self.phases.count, cell, listed)
     }
 
+    /// The present phases not in `listed` that hold under a quarter of the
+    /// pixels or voxels that look like them ([`super::absorbed`]; a pass
+    /// over the image at the end of a run).
+    fn absorbed_phases(&self, listed: &[LostPhase]) -> Vec<LostPhase> {
+        let mut by_rank: Vec<(usize, f64)> = (0..self.phases.count.len())
+            .filter(|&l| self.phases.count[l] > 0)
+            .filter_map(|l| self.phases.mean[l].map(|m| (l, m)))
+            .collect();
+        by_rank.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let mut rank = vec![u8::MAX; self.phases.count.len()];
+        for (r, &(l, _)) in by_rank.iter().enumerate() {
+            rank[l] = r as u8;
+        }
+        let means: Vec<f64> = by_rank.iter().map(|&(_, m)| m).collect();
+        absorbed_phases(&self.image, &self.label_image_with(&rank), &means)
+            .into_iter()
+            .map(|a| LostPhase::Absorbed {
+                phase: by_rank[a.rank].0 as Label,
+                count: a.count,
+                looks_like: a.looks_like,
+            })
+            .filter(|a| !listed.iter().any(|l| l.label() == a.label()))
+            .collect()
+    }
+
     /// Merges each duplicate phase, and each band along the edge between two
     /// others, into its twin and re-seeds every lost
     /// label by splitting the phase with the most structure beyond noise (at most `2·N`
@@ -1410,6 +1436,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let order = self.phase_order();
         let mut lost = self.lost_phases();
         lost.extend(self.vestige_phases(&lost));
+        lost.extend(self.absorbed_phases(&lost));
         let mut warnings: Vec<String> = lost
             .iter()
             .map(|l| {
@@ -1511,7 +1538,12 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// The final labelling rasterised per pixel (pixel-centre rule), values
     /// `0..N` ordered by increasing phase mean.
     pub fn label_image(&self) -> Vec<u8> {
-        let map = self.phase_order();
+        self.label_image_with(&self.phase_order())
+    }
+
+    /// The labelling rasterised per pixel, each mesh label `l` written as
+    /// `map[l]` (labels past the map's end as its last entry).
+    fn label_image_with(&self, map: &[u8]) -> Vec<u8> {
         let mut out = vec![0u8; self.image.len()];
         for c in self.complex.cell_ids() {
             let l = map[(self.complex.label(c) as usize).min(map.len() - 1)];

@@ -44,6 +44,7 @@
 //! - [`driver`]: the segmentation loop, the Mumford–Shah energy and the stopping rule;
 //! - [`params`] and [`error`].
 
+pub mod absorbed;
 pub mod adaptive;
 pub mod auto;
 pub mod band_flips;

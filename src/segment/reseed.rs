@@ -53,6 +53,18 @@ pub enum LostPhase {
         /// Its pixels or voxels.
         count: u64,
     },
+    /// The phase holds under a quarter of the pixels or voxels that look
+    /// like it ([`super::absorbed`]): a class of the image went to its
+    /// neighbours (reported at the end of a run, never re-seeded).
+    Absorbed {
+        /// The phase.
+        phase: Label,
+        /// Its pixels or voxels.
+        count: u64,
+        /// The pixels or voxels of the smoothed image in the middle half of
+        /// its nearest-mean range.
+        looks_like: u64,
+    },
 }
 
 impl LostPhase {
@@ -62,7 +74,8 @@ impl LostPhase {
             LostPhase::Empty(l)
             | LostPhase::Duplicate { phase: l, .. }
             | LostPhase::Band { phase: l, .. }
-            | LostPhase::Vestige { phase: l, .. } => l,
+            | LostPhase::Vestige { phase: l, .. }
+            | LostPhase::Absorbed { phase: l, .. } => l,
         }
     }
 
@@ -96,6 +109,18 @@ impl LostPhase {
             LostPhase::Vestige { phase: l, count } => format!(
                 "phase {} holds only {count} pixels or voxels, fewer than one cell of the \
                  mesh (a vestige, not a region)",
+                phase(l)
+            ),
+            LostPhase::Absorbed {
+                phase: l,
+                count,
+                looks_like,
+            } => format!(
+                "phase {} holds only {count} pixels or voxels against {looks_like} that \
+                 look like it (in the image smoothed by one pixel, nearer its mean than a \
+                 quarter of the way to its neighbours'): a class of the image went to its \
+                 neighbours, thinner than the length weight's width or the cells (a lower \
+                 --length-weight or --edge-length, or finer voxels, may keep it)",
                 phase(l)
             ),
         }

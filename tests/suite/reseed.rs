@@ -37,7 +37,10 @@ fn a_lost_phase_of_close_means_is_reseeded() {
 /// two phases on the large background and merges the two brightest levels.
 /// The re-seed must split the merged pair, whose cells' means hold a second
 /// level, not the background, whose cells differ by noise only (splitting it
-/// gives a duplicate again, and the run ended with an empty phase).
+/// gives a duplicate again, and the run ended with an empty phase). The
+/// darkest disks, 0.14 above the background, still lose three quarters of
+/// their pixels to it, which the report must say (an absorbed phase), and
+/// nothing else.
 #[test]
 fn the_reseed_splits_the_phase_that_merges_two_levels() {
     let ph = Phantom2Kind::Disks(6).generate(256, 0.2, 1);
@@ -45,7 +48,14 @@ fn the_reseed_splits_the_phase_that_merges_two_levels() {
     let mut seg = Segmentation2::new(view, SegmentParams::new(6)).unwrap();
     let report = seg.run(|_| {});
     assert!(report.reseeds >= 1, "{report:?}");
-    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    assert!(seg.lost_phases().is_empty());
+    assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+    assert!(
+        report.warnings[0].starts_with("phase 1 holds only")
+            && report.warnings[0].contains("went to its neighbours"),
+        "{:?}",
+        report.warnings
+    );
     let dice = mean_dice(&seg.label_image(), &ph.truth, 6);
     assert!(dice > 0.85, "Dice {dice}");
 }
