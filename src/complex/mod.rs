@@ -27,7 +27,7 @@ pub use build::BuildError;
 pub use cavity::Rejection;
 pub use class::{VertexClass, VertexKind};
 pub use export::MeshArrays;
-pub use interface::InterfaceFacet;
+pub use interface::{InterfaceFacet, InterfaceFacets};
 pub use validate::Finding;
 
 use crate::dim::{Dim, Point, D2, D3};

@@ -243,21 +243,13 @@ impl<K: Connectivity> Complex<K> {
     /// [`interface_edges`](Self::interface_edges) into `edges` (cleared first).
     pub fn interface_edges_into(&self, edges: &mut Vec<(VertexId, VertexId)>) {
         edges.clear();
-        for c in self.cell_ids() {
+        for (c, i) in self.interface_facet_ids() {
             let cell = self.cell(c);
-            for i in 0..K::NV {
-                let Some(nb) = self.neighbours(c)[i] else {
-                    continue;
-                };
-                if nb < c || self.label(nb) == self.label(c) {
-                    continue;
-                }
-                for a in 0..K::NV {
-                    for b in a + 1..K::NV {
-                        if a != i && b != i {
-                            let (u, v) = (cell[a], cell[b]);
-                            edges.push(if u < v { (u, v) } else { (v, u) });
-                        }
+            for a in 0..K::NV {
+                for b in a + 1..K::NV {
+                    if a != i && b != i {
+                        let (u, v) = (cell[a], cell[b]);
+                        edges.push(if u < v { (u, v) } else { (v, u) });
                     }
                 }
             }
