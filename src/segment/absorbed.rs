@@ -37,21 +37,18 @@ pub struct Absorbed {
     pub looks_like: u64,
 }
 
-/// The absorbed phases of a labelling. `ranks` gives each pixel's phase as
-/// its rank by increasing mean, `means` the phases' means in that order (the
-/// present phases only; pixels of a higher rank are not counted).
-pub fn absorbed_phases(image: &ImageView<'_>, ranks: &[u8], means: &[f64]) -> Vec<Absorbed> {
-    if means.len() < 2 || ranks.len() != image.data.len() {
+/// The absorbed phases of a result whose phases, by increasing mean, have
+/// means `means` and hold `count` pixels or voxels (the present phases
+/// only): the segmentation's cell statistics give the counts, so no
+/// labelling of the image is needed.
+pub fn absorbed_by_count(image: &ImageView<'_>, count: &[u64], means: &[f64]) -> Vec<Absorbed> {
+    if means.len() < 2 || count.len() != means.len() {
         return Vec::new();
     }
     let [nx, ny, nz] = image.dims;
     let smoothed = gaussian_blur_3d(image.data, nx, ny, nz, 1.0);
-    let mut count = vec![0u64; means.len()];
     let mut looks_like = vec![0u64; means.len()];
-    for (&rank, &value) in ranks.iter().zip(&smoothed) {
-        if let Some(c) = count.get_mut(rank as usize) {
-            *c += 1;
-        }
+    for &value in &smoothed {
         if let Some(r) = middle_half_rank(means, value as f64) {
             looks_like[r] += 1;
         }
@@ -90,6 +87,18 @@ fn middle_half_rank(means: &[f64], value: f64) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`absorbed_by_count`] of a labelling: `ranks` gives each pixel's
+    /// phase as its rank by increasing mean.
+    fn absorbed_phases(image: &ImageView<'_>, ranks: &[u8], means: &[f64]) -> Vec<Absorbed> {
+        let mut count = vec![0u64; means.len()];
+        for &rank in ranks {
+            if let Some(c) = count.get_mut(rank as usize) {
+                *c += 1;
+            }
+        }
+        absorbed_by_count(image, &count, means)
+    }
 
     #[test]
     fn values_count_for_the_phase_whose_middle_half_holds_them() {

@@ -1,6 +1,6 @@
 //! The iteration driver: integrate, flip, compute forces, deform, check convergence.
 
-use super::absorbed::absorbed_phases;
+use super::absorbed::absorbed_by_count;
 use super::adaptive::{AdaptiveSizing, Sizes};
 use super::band_phase::{band_phases, range_counts, VoxelSize};
 use super::coarse_pass::{self, CoarsePassSummary};
@@ -1056,7 +1056,15 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             rank[l] = r as u8;
         }
         let means: Vec<f64> = by_rank.iter().map(|&(_, m)| m).collect();
-        absorbed_phases(&self.image, &self.label_image_with(&rank), &means)
+        // (the cells' pixel counts, summed by label after the last
+        // integration: those of the label image, which is not made here)
+        let count: Vec<u64> = by_rank.iter().map(|&(l, _)| self.phases.count[l]).collect();
+        debug_assert_eq!(
+            count,
+            pixels_by_rank(&self.label_image_with(&rank), count.len()),
+            "the cells' pixel counts are the label image's"
+        );
+        absorbed_by_count(&self.image, &count, &means)
             .into_iter()
             .map(|a| LostPhase::Absorbed {
                 phase: by_rank[a.rank].0 as Label,
@@ -1552,4 +1560,15 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
         out
     }
+}
+
+/// How many entries of `ranks` hold each rank below `n`.
+fn pixels_by_rank(ranks: &[u8], n: usize) -> Vec<u64> {
+    let mut count = vec![0u64; n];
+    for &r in ranks {
+        if let Some(c) = count.get_mut(r as usize) {
+            *c += 1;
+        }
+    }
+    count
 }
