@@ -1,5 +1,6 @@
 //! Mesh improvement between moves: smoothing, flips, removal of degenerate cells.
 
+use super::splits_made::SplitsMade;
 use super::workspace::{RegionBuffers, WalkScratch};
 use super::{DscParams, DscWorkspace, SizingField};
 use crate::complex::{CellId, Complex, Rejection, VertexId};
@@ -553,7 +554,9 @@ impl<K: Connectivity> Complex<K> {
     /// Removes degenerate cells by collapsing their edges, shortest first: a
     /// safe collapse where one exists, otherwise an unsafe one (which may merge
     /// interfaces: the DSC's topology change). In 3D a degenerate tet that no
-    /// collapse removes is split at its longest edge when that is longer than `L`.
+    /// collapse removes is split at its longest edge when that is longer than
+    /// `L`; the removal neither collapses an edge at a vertex it made so nor
+    /// splits a cell with such a corner again (no split–collapse cycles).
     /// Returns the (safe, unsafe, split) counts.
     pub fn remove_degenerate(&mut self, params: &DscParams) -> (usize, usize, usize) {
         let all: Vec<CellId> = self.cell_ids().collect();
@@ -584,12 +587,16 @@ impl<K: Connectivity> Complex<K> {
     ) -> (usize, usize, usize) {
         let straight_cos = params.straight_angle_deg.to_radians().cos();
         let (mut safe, mut unsafe_, mut splits) = (0, 0, 0);
-        // A worklist: a collapse reshapes the star of the vertex it keeps, so
-        // that star is checked again; the budget bounds pathological cascades.
+        // A worklist: a collapse or split reshapes the star of the vertex it
+        // keeps or makes, so that star is checked again. Since no collapse
+        // undoes a split and no split cell is split again (`SplitsMade`), the
+        // work is bounded by the region; the budget is a last guard only.
         let work = &mut walk.work;
         work.clear();
         work.extend_from_slice(cells);
         let star = &mut walk.star;
+        let made = &mut walk.splits;
+        made.clear();
         let mut budget = 4 * cells.len() + 16;
         while let Some(c) = work.pop() {
             if budget == 0 {
@@ -599,7 +606,7 @@ impl<K: Connectivity> Complex<K> {
             if !self.is_alive(c) || !self.is_degenerate_sized(c, params, sizing) {
                 continue;
             }
-            let touched = match self.collapse_cell(c, params, straight_cos, star) {
+            let touched = match self.collapse_cell(c, params, straight_cos, made, star) {
                 Some((mode, kept)) => {
                     match mode {
                         CollapseMode::Safe => safe += 1,
@@ -607,8 +614,9 @@ impl<K: Connectivity> Complex<K> {
                     }
                     kept
                 }
-                // No collapse removes it; split its longest edge if longer than h.
-                None if K::SPLITS_UNCOLLAPSIBLE => {
+                // No collapse removes it; split its longest edge if longer
+                // than h, unless a split of this removal made the cell.
+                None if K::SPLITS_UNCOLLAPSIBLE && !made.holds_a_corner_of(self.cell(c)) => {
                     let (u, v) = self.longest_edge(c);
                     let h = sizing.at_cell(&self.cell_points(c)[..K::NV], params.edge_length);
                     let long =
@@ -619,6 +627,7 @@ impl<K: Connectivity> Complex<K> {
                     match self.split_edge(u, v) {
                         Ok(m) => {
                             splits += 1;
+                            made.record(m);
                             m
                         }
                         Err(_) => continue,
@@ -632,16 +641,19 @@ impl<K: Connectivity> Complex<K> {
         (safe, unsafe_, splits)
     }
 
-    /// Tries to collapse one edge of `c`, shortest first, safe before unsafe.
-    /// `star` is scratch.
+    /// Tries to collapse one edge of `c`, shortest first, safe before unsafe,
+    /// but none at a vertex the removal made by a split (`made`, see
+    /// [`SplitsMade`]). `star` is scratch.
     fn collapse_cell(
         &mut self,
         c: CellId,
         params: &DscParams,
         straight_cos: f64,
+        made: &SplitsMade,
         star: &mut Vec<CellId>,
     ) -> Option<(CollapseMode, VertexId)> {
-        let edges = self.sorted_edges(c);
+        let mut edges = self.sorted_edges(c);
+        edges.retain(|&mut (u, v)| !made.holds_an_end_of(u, v));
         // Where degenerate cells cluster, a collapse that removes one may leave
         // the surviving neighbours below the degenerate quality; it is still
         // accepted if it makes no surviving cell worse than the worst one there.

@@ -10,6 +10,7 @@ mod params;
 mod refusals;
 mod resize;
 mod sizing;
+mod splits_made;
 mod workspace;
 
 pub use deform::{DeformReport, Destinations};

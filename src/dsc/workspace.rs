@@ -7,6 +7,7 @@
 //! operations' few small buffers aside).
 
 use super::refusals::RefusedCollapses;
+use super::splits_made::SplitsMade;
 use super::SizingField;
 use crate::complex::{CellId, VertexId};
 use crate::dim::Dim;
@@ -104,6 +105,9 @@ pub(crate) struct WalkScratch {
     pub(super) star: Vec<CellId>,
     /// The worklist of degenerate-cell removal.
     pub(super) work: Vec<CellId>,
+    /// The vertices the current degenerate-cell removal made by splits,
+    /// which it does not collapse away.
+    pub(super) splits: SplitsMade,
     /// Per vertex of `vertices`: whether its star holds a degenerate cell.
     pub(super) degenerate: Vec<bool>,
     /// Cells found not degenerate by the current search for degenerate
