@@ -790,7 +790,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         // Under noise a fixed step never lets every vertex settle: once the
         // energy has not reached a new low for `STALL_ITERATIONS`, halve the
         // step (down to 1/16 of the parameter).
-        if !quiet_round && rec.energy < self.best_energy - 3e-4 * rec.energy.abs() {
+        let new_low = self.best_energy - self.params.new_low_fraction * rec.energy.abs();
+        if !quiet_round && rec.energy < new_low {
             self.best_energy = rec.energy;
             self.stalled = 0;
             self.since_new_low = 0;
