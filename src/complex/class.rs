@@ -195,6 +195,22 @@ impl<K: Dim> Complex<K> {
     /// The corners of every flip and collapse (a 3D collapse's star: about
     /// 30 tets) are listed on the stack.
     pub(crate) fn reclassify_cells(&mut self, cells: &[CellId]) {
+        if cells.len() >= self.cell_count() {
+            // (an initialisation labels every cell: its corners are most
+            // vertices, taken in id order by a mark each rather than sorted)
+            let mut corner = vec![false; self.vertex_capacity()];
+            for &c in cells.iter().filter(|&&c| self.is_alive(c)) {
+                for v in self.cells[c.index()].as_ref() {
+                    corner[v.index()] = true;
+                }
+            }
+            let mut corners: Vec<VertexId> = (0..corner.len() as u32)
+                .map(VertexId)
+                .filter(|v| corner[v.index()])
+                .collect();
+            self.reclassify_vertices(&mut corners);
+            return;
+        }
         let mut corners: SmallVec<[VertexId; 128]> = cells
             .iter()
             .filter(|&&c| self.is_alive(c))
