@@ -113,16 +113,27 @@ fn created() -> MutexGuard<'static, Vec<PathBuf>> {
 }
 
 /// Removes `dir` although another thread may still be writing an output into
-/// it: a file created between `remove_dir_all`'s listing and its final
-/// `rmdir` makes that fail with the directory left behind, so it is tried
-/// again until the directory is gone. Once it is, no writer can create a file
-/// in it (the path no longer exists), so a few tries suffice; the bound only
-/// keeps a directory that cannot be removed (permissions) from holding the
-/// exit forever.
+/// it. `dir` is first renamed to a sibling: from then on no writer can create
+/// a file under the old path (it no longer exists), whereas a writer creating
+/// files faster than `remove_dir_all` lists and deletes them could keep the
+/// directory alive for ever (every `rmdir` failing on a newer file). The
+/// renamed directory is then removed; the bound on the tries only keeps a
+/// directory that cannot be removed (permissions) from holding the exit
+/// forever.
 fn remove_while_written(dir: &Path) {
+    let target = match (dir.parent(), dir.file_name()) {
+        (Some(parent), Some(name)) => {
+            let removing = parent.join(format!(".removing{}", name.to_string_lossy()));
+            match std::fs::rename(dir, &removing) {
+                Ok(()) => removing,
+                Err(_) => dir.to_path_buf(),
+            }
+        }
+        _ => dir.to_path_buf(),
+    };
     for _ in 0..100 {
-        match std::fs::remove_dir_all(dir) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound && dir.exists() => {
+        match std::fs::remove_dir_all(&target) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound && target.exists() => {
                 std::thread::sleep(std::time::Duration::from_millis(5))
             }
             _ => return,
@@ -145,7 +156,8 @@ mod tests {
 
     /// A writer creating files as fast as it can while the directory is
     /// removed (as the main thread writing outputs while Ctrl-C is handled):
-    /// the directory must be gone afterwards, whatever the interleaving.
+    /// the directory must be gone afterwards, whatever the interleaving, and
+    /// nothing left beside it.
     #[test]
     fn a_directory_being_written_is_removed() {
         let parent = tempfile::tempdir().unwrap();
@@ -176,6 +188,8 @@ mod tests {
             stop.store(true, Ordering::Release);
             writer.join().unwrap();
             assert!(!dir.exists(), "round {round}: the directory survived");
+            let left: Vec<_> = std::fs::read_dir(parent.path()).unwrap().collect();
+            assert!(left.is_empty(), "round {round}: {left:?} left behind");
         }
     }
 }
