@@ -63,6 +63,18 @@ pub fn absorbed_by_count(image: &ImageView<'_>, count: &[u64], means: &[f64]) ->
         .collect()
 }
 
+/// How many entries of `ranks` (a labelling's phase per pixel, as ranks)
+/// hold each rank below `n`: the counts [`absorbed_by_count`] takes.
+pub fn pixels_by_rank(ranks: &[u8], n: usize) -> Vec<u64> {
+    let mut count = vec![0u64; n];
+    for &r in ranks {
+        if let Some(c) = count.get_mut(r as usize) {
+            *c += 1;
+        }
+    }
+    count
+}
+
 /// The rank whose middle half of the nearest-mean range holds `value`
 /// (`means` increasing; the lowest and highest ranges are open outwards).
 fn middle_half_rank(means: &[f64], value: f64) -> Option<usize> {
@@ -91,13 +103,7 @@ mod tests {
     /// [`absorbed_by_count`] of a labelling: `ranks` gives each pixel's
     /// phase as its rank by increasing mean.
     fn absorbed_phases(image: &ImageView<'_>, ranks: &[u8], means: &[f64]) -> Vec<Absorbed> {
-        let mut count = vec![0u64; means.len()];
-        for &rank in ranks {
-            if let Some(c) = count.get_mut(rank as usize) {
-                *c += 1;
-            }
-        }
-        absorbed_by_count(image, &count, means)
+        absorbed_by_count(image, &pixels_by_rank(ranks, means.len()), means)
     }
 
     #[test]

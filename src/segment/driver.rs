@@ -1,6 +1,6 @@
 //! The iteration driver: integrate, flip, compute forces, deform, check convergence.
 
-use super::absorbed::absorbed_by_count;
+use super::absorbed::{absorbed_by_count, pixels_by_rank};
 use super::adaptive::{AdaptiveSizing, Sizes};
 use super::band_phase::{band_phases, range_counts, VoxelSize};
 use super::coarse_pass::{self, CoarsePassSummary};
@@ -1561,15 +1561,4 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
         out
     }
-}
-
-/// How many entries of `ranks` hold each rank below `n`.
-fn pixels_by_rank(ranks: &[u8], n: usize) -> Vec<u64> {
-    let mut count = vec![0u64; n];
-    for &r in ranks {
-        if let Some(c) = count.get_mut(r as usize) {
-            *c += 1;
-        }
-    }
-    count
 }
