@@ -381,11 +381,14 @@ fn counted(labels: &[u8], phases: usize) -> PartialVolume {
 /// The two phases a band pixel with window label set `set` mixes, when the
 /// model applies: exactly two labels, both with plateaus that differ.
 fn mixed_pair(set: u16, plateaus: &[Option<Plateau>]) -> Option<(usize, usize)> {
-    if set.count_ones() != 2 {
+    // Exactly two bits: one left once the lowest is cleared (without
+    // `count_ones`, a loop of instructions on CPUs without `popcnt`).
+    let rest = set & set.wrapping_sub(1);
+    if rest == 0 || rest & rest.wrapping_sub(1) != 0 {
         return None;
     }
     let a = set.trailing_zeros() as usize;
-    let b = (set & (set - 1)).trailing_zeros() as usize;
+    let b = rest.trailing_zeros() as usize;
     let (pa, pb) = (plateaus.get(a)?.as_ref()?, plateaus.get(b)?.as_ref()?);
     let contrast = (pa.mean - pb.mean).abs();
     let scale = pa.mean.abs().max(pb.mean.abs()).max(f64::MIN_POSITIVE);
@@ -410,14 +413,16 @@ struct Plateau {
 /// [`PLATEAU_DEPTH`] (no other label within that distance).
 fn band_and_depth(labels: &[u8], dims: [usize; 3], phases: usize) -> (Vec<u16>, Vec<u8>) {
     let mut sets = label_sets(labels, phases);
-    let mut depth = vec![PLATEAU_DEPTH; labels.len()];
+    // The sets only grow with the reach, so a pixel's depth is the number
+    // of reaches at which its set still holds one label at most (a set of
+    // two or more has a bit left once its lowest is cleared): counted
+    // without a branch, so that the loop vectorises.
+    let mut depth = vec![0u8; labels.len()];
     let mut band = Vec::new();
     for reach in 1..=PLATEAU_DEPTH {
         grow_by_one(&mut sets, dims);
-        for (d, s) in depth.iter_mut().zip(&sets) {
-            if *d == PLATEAU_DEPTH && s.count_ones() > 1 {
-                *d = reach - 1;
-            }
+        for (d, &s) in depth.iter_mut().zip(&sets) {
+            *d += u8::from(s & s.wrapping_sub(1) == 0);
         }
         if reach == BAND_HALF_WIDTH {
             band = sets.clone();
@@ -438,20 +443,32 @@ fn label_sets(labels: &[u8], phases: usize) -> Vec<u16> {
 /// one axis at a time, in place (a copy of one line or slice at a time).
 fn grow_by_one(sets: &mut [u16], dims: [usize; 3]) {
     let [nx, ny, _] = dims;
+    let mut copy = vec![0u16; nx];
     for row in sets.chunks_exact_mut(nx) {
-        let mut before = 0;
-        for i in 0..nx {
-            let own = row[i];
-            let after = row.get(i + 1).copied().unwrap_or(0);
-            row[i] = own | before | after;
-            before = own;
-        }
+        grow_row(row, &mut copy);
     }
     // Along y within each z slice (lines of nx), then along z (slices of nx·ny).
     for (line, lines) in [(nx, ny), (nx * ny, sets.len() / (nx * ny))] {
         for block in sets.chunks_exact_mut(line * lines) {
             grow_lines(block, line);
         }
+    }
+}
+
+/// ORs each element of `row` with its two neighbours' original values;
+/// `copy` is scratch of the row's length. Written without a dependency
+/// from one element to the next, so that the compiler vectorises it.
+fn grow_row(row: &mut [u16], copy: &mut [u16]) {
+    let n = row.len();
+    if n < 2 {
+        return;
+    }
+    copy.copy_from_slice(row);
+    for ((r, &own), &after) in row.iter_mut().zip(&*copy).zip(&copy[1..]) {
+        *r = own | after;
+    }
+    for (r, &before) in row[1..].iter_mut().zip(&*copy) {
+        *r |= before;
     }
 }
 
@@ -468,9 +485,13 @@ fn grow_lines(block: &mut [u16], line: usize) {
         let (head, tail) = block.split_at_mut((k + 1) * line);
         let current = &mut head[k * line..];
         own.copy_from_slice(current);
-        let after = tail.get(..line);
-        for (i, c) in current.iter_mut().enumerate() {
-            *c |= before[i] | after.map_or(0, |a| a[i]);
+        for (c, &b) in current.iter_mut().zip(&before) {
+            *c |= b;
+        }
+        if let Some(after) = tail.get(..line) {
+            for (c, &a) in current.iter_mut().zip(after) {
+                *c |= a;
+            }
         }
         std::mem::swap(&mut before, &mut own);
     }
