@@ -42,10 +42,8 @@ impl IntensityStats {
     /// The figures of `image` (finite samples, at least one).
     pub fn of(image: &ImageView<'_>) -> Self {
         let (min, max) = image.range().unwrap_or((0.0, 0.0));
-        let mut sample = strided_sample(image.data);
-        let (mut low, mut high) = (quantile(&mut sample, ROBUST_TAIL), {
-            quantile(&mut sample, 1.0 - ROBUST_TAIL)
-        });
+        let mut sample = strided_keys(image.data);
+        let [mut low, mut high] = quantile_pair(&mut sample, [ROBUST_TAIL, 1.0 - ROBUST_TAIL]);
         if high <= low {
             // Most samples share one value: fall back on the extremes.
             (low, high) = (min, max);
@@ -74,10 +72,7 @@ impl IntensityStats {
     /// count in the end bins, so a few outliers cannot stretch the bins).
     pub fn histogram(&self, image: &ImageView<'_>) -> Histogram {
         let mut h = Histogram::empty(self.low, self.low + self.scale());
-        for &v in image.data {
-            let v = v as f64;
-            h.add(v, 1.0, v, v * v);
-        }
+        h.add_samples(image.data);
         h
     }
 
@@ -97,20 +92,68 @@ impl IntensityStats {
     }
 }
 
-/// Samples of `data`, every k-th so that at most [`MAX_SAMPLES`] are taken.
-fn strided_sample(data: &[f32]) -> Vec<f32> {
-    let stride = data.len().div_ceil(MAX_SAMPLES).max(1);
-    data.iter().step_by(stride).copied().collect()
+/// The bin of a sample `x` bin widths above the histogram's low end, the
+/// end bins taking what lies beyond them (and a NaN the first): the cast
+/// saturates, and for `x ≥ 0` truncates as `floor` would, without its call
+/// (a library function on CPUs without SSE4.1).
+fn bin_index(x: f64, bins: usize) -> usize {
+    (x as usize).min(bins - 1)
 }
 
-/// The `q` quantile of `v` (reordered in place; `v` non-empty).
-fn quantile(v: &mut [f32], q: f64) -> f64 {
-    if v.is_empty() {
+/// The order keys of samples of `data`, every k-th so that at most
+/// [`MAX_SAMPLES`] are taken (see [`order_key`]).
+fn strided_keys(data: &[f32]) -> Vec<i32> {
+    let stride = data.len().div_ceil(MAX_SAMPLES).max(1);
+    data.iter().step_by(stride).map(|&v| order_key(v)).collect()
+}
+
+/// An integer that orders as [`f32::total_cmp`] orders `v` (its own
+/// transformation of the bits): selecting among integers is faster than
+/// among floats through a comparison function. [`from_order_key`] undoes it.
+fn order_key(v: f32) -> i32 {
+    let bits = v.to_bits() as i32;
+    bits ^ (((bits >> 31) as u32) >> 1) as i32
+}
+
+/// The sample whose [`order_key`] is `key`.
+fn from_order_key(key: i32) -> f32 {
+    // The transformation keeps the sign bit, so it is its own inverse.
+    f32::from_bits(order_key(f32::from_bits(key as u32)) as u32)
+}
+
+/// The `q` quantile of the samples whose order keys are `keys` (reordered
+/// in place; `keys` non-empty): the sample of rank `round((n − 1)·q)`.
+fn quantile(keys: &mut [i32], q: f64) -> f64 {
+    if keys.is_empty() {
         return 0.0;
     }
-    let k = ((v.len() - 1) as f64 * q).round() as usize;
-    let (_, x, _) = v.select_nth_unstable_by(k, f32::total_cmp);
-    *x as f64
+    let k = rank(keys.len(), q);
+    let (_, x, _) = keys.select_nth_unstable(k);
+    from_order_key(*x) as f64
+}
+
+/// The quantiles `q[0] ≤ q[1]` of the samples whose order keys are `keys`
+/// (reordered in place), as [`quantile`] gives each: the second is
+/// selected among the keys the first left above it.
+fn quantile_pair(keys: &mut [i32], q: [f64; 2]) -> [f64; 2] {
+    if keys.is_empty() {
+        return [0.0; 2];
+    }
+    let (k0, k1) = (rank(keys.len(), q[0]), rank(keys.len(), q[1]));
+    debug_assert!(k0 <= k1);
+    let (_, x0, above) = keys.select_nth_unstable(k0);
+    let x0 = *x0;
+    let x1 = if k1 == k0 {
+        x0
+    } else {
+        *above.select_nth_unstable(k1 - k0 - 1).1
+    };
+    [from_order_key(x0) as f64, from_order_key(x1) as f64]
+}
+
+/// The rank of the `q` quantile among `n` samples.
+fn rank(n: usize, q: f64) -> usize {
+    ((n - 1) as f64 * q).round() as usize
 }
 
 /// Noise standard deviation from the median absolute difference of
@@ -124,12 +167,12 @@ fn noise_sigma(image: &ImageView<'_>) -> f64 {
     let rows = image.data.len() / w;
     let pairs = rows * (w - 1);
     let stride = pairs.div_ceil(MAX_SAMPLES).max(1);
-    let mut diffs: Vec<f32> = (0..pairs)
+    let mut diffs: Vec<i32> = (0..pairs)
         .step_by(stride)
         .map(|i| {
             let (r, x) = (i / (w - 1), i % (w - 1));
             let p = r * w + x;
-            (image.data[p + 1] - image.data[p]).abs()
+            order_key((image.data[p + 1] - image.data[p]).abs())
         })
         .collect();
     quantile(&mut diffs, 0.5) / (0.6745 * std::f64::consts::SQRT_2)
@@ -167,11 +210,32 @@ impl Histogram {
     /// The histogram of `data` over `[low, high]` (`high > low`).
     pub fn new(data: &[f32], low: f64, high: f64) -> Self {
         let mut h = Self::empty(low, high);
+        h.add_samples(data);
+        h
+    }
+
+    /// Adds each sample of `data` as one count: as [`add`](Self::add) with
+    /// count 1, in one loop over the samples (the image's whole histogram
+    /// is a pass over its pixels).
+    pub fn add_samples(&mut self, data: &[f32]) {
+        let bins = self.count.len();
+        let (low, width) = (self.low, self.width);
+        let high = low + bins as f64 * width;
+        let count = &mut self.count[..bins];
+        let sum = &mut self.sum[..bins];
+        let sum_sq = &mut self.sum_sq[..bins];
         for &v in data {
             let v = v as f64;
-            h.add(v, 1.0, v, v * v);
+            let end = if v < low || v > high {
+                v.clamp(low, high)
+            } else {
+                v
+            };
+            let b = bin_index((v - low) / width, bins);
+            count[b] += 1.0;
+            sum[b] += end;
+            sum_sq[b] += end * end;
         }
-        h
     }
 
     /// Adds `count` samples with the given sums to the bin of `at`. Samples
@@ -189,7 +253,7 @@ impl Histogram {
         } else {
             (sum, sum_sq)
         };
-        let b = (((at - self.low) / self.width).floor().max(0.0) as usize).min(bins - 1);
+        let b = bin_index((at - self.low) / self.width, bins);
         self.count[b] += count;
         self.sum[b] += sum;
         self.sum_sq[b] += sum_sq;
@@ -209,6 +273,55 @@ impl Histogram {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The quantiles selected by order key are the samples of that rank
+        /// in `f32::total_cmp`'s order, bit for bit (negative zeros and
+        /// infinities included).
+        #[test]
+        fn quantiles_by_key_are_the_ranked_samples(
+            data in prop::collection::vec(
+                prop_oneof![
+                    -1e6f32..1e6,
+                    Just(0.0f32),
+                    Just(-0.0f32),
+                    Just(f32::INFINITY),
+                    Just(f32::NEG_INFINITY),
+                ],
+                1..400,
+            ),
+            q0 in 0.0f64..1.0,
+            q1 in 0.0f64..1.0,
+        ) {
+            let (q0, q1) = (q0.min(q1), q0.max(q1));
+            let mut sorted = data.clone();
+            sorted.sort_by(f32::total_cmp);
+            let expect = |q: f64| f64::from(sorted[rank(sorted.len(), q)]);
+            let mut keys: Vec<i32> = data.iter().map(|&v| order_key(v)).collect();
+            let [a, b] = quantile_pair(&mut keys, [q0, q1]);
+            prop_assert_eq!(a.to_bits(), expect(q0).to_bits());
+            prop_assert_eq!(b.to_bits(), expect(q1).to_bits());
+            let mut keys: Vec<i32> = data.iter().map(|&v| order_key(v)).collect();
+            prop_assert_eq!(quantile(&mut keys, q1).to_bits(), expect(q1).to_bits());
+        }
+
+        /// The bin of a sample is `floor` of its offset in bin widths,
+        /// clamped to the bins.
+        #[test]
+        fn bin_index_is_the_clamped_floor(x in -1e3f64..1e3) {
+            let bins = HISTOGRAM_BINS;
+            let expect = (x.floor().max(0.0) as usize).min(bins - 1);
+            prop_assert_eq!(bin_index(x, bins), expect);
+        }
+    }
+
+    #[test]
+    fn bin_index_sends_non_finite_offsets_to_the_end_bins() {
+        assert_eq!(bin_index(f64::NAN, 8), 0);
+        assert_eq!(bin_index(f64::NEG_INFINITY, 8), 0);
+        assert_eq!(bin_index(f64::INFINITY, 8), 7);
+    }
 
     #[test]
     fn stats_follow_an_affine_map() {
