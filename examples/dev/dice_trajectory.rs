@@ -1,7 +1,8 @@
 //! Prints, per iteration of a default 3D run on a volume with ground truth,
 //! the energy, the flips, the largest move, the step, the cells, the mean
 //! Dice of the labels at that point against the truth and against the
-//! previous iteration's labels: what the stopping rule sees against what it
+//! previous iteration's labels, and the seconds the iteration took (wall
+//! clock, without the scoring): what the stopping rule sees against what it
 //! is meant to judge, from one run instead of one run per
 //! `--max-iterations N`, and whether the labels still move when it stops.
 //!
@@ -107,8 +108,10 @@ fn main() {
     let mut seg = Segmentation::<D3>::new(view, params).expect("segmentation");
     let mut converged_at = None;
     let mut previous: Option<Vec<u8>> = None;
-    println!("iteration energy flips max_move step cells dice dice_previous");
+    println!("iteration energy flips max_move step cells dice dice_previous seconds");
+    let mut clock = std::time::Instant::now();
     seg.run_until(|s, r| {
+        let seconds = clock.elapsed().as_secs_f64();
         let flip_round = (r.iteration - 1) % flip_interval == 0;
         let labels = s.label_image();
         let dice = if r.iteration % every == 0 || flip_round || s.converged() {
@@ -123,7 +126,7 @@ fn main() {
             std::fs::write(format!("{dir}/labels_{:03}.u8", r.iteration), &labels).expect("dump");
         }
         println!(
-            "{} {:.3} {} {:.4} {:.4} {} {} {}{}",
+            "{} {:.3} {} {:.4} {:.4} {} {} {} {:.3}{}",
             r.iteration,
             r.energy,
             r.flips,
@@ -132,9 +135,11 @@ fn main() {
             r.cells,
             dice,
             dice_previous,
+            seconds,
             if s.converged() { " converged" } else { "" }
         );
         previous = Some(labels);
+        clock = std::time::Instant::now();
         if s.converged() && converged_at.is_none() {
             converged_at = Some(r.iteration);
         }

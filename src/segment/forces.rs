@@ -21,8 +21,11 @@ use super::image::ImageView;
 use super::integrate::PhaseStats;
 use super::params::{ForceModel, JunctionForce};
 use super::raster::Raster;
-use crate::complex::{CellId, Complex, InterfaceFacet, Label, VertexId, VertexKind};
+use crate::complex::{
+    CellId, Complex, InterfaceFacet, InterfaceFacets, Label, VertexId, VertexKind,
+};
 use crate::dim::{Dim, Point};
+use rayon::prelude::*;
 
 /// Most phases tracked around one vertex; further ones are ignored.
 const MAXP: usize = 6;
@@ -124,15 +127,14 @@ pub struct ForceField<K: Dim> {
     /// Umbrella `ΔX` per vertex id (pixels), the direction of the elasticity force.
     pub stretching: Vec<K::Point>,
     facets: Vec<Facet>,
+    /// The image samples of the facets, taken ahead on several threads.
+    sampled: FacetSamples<K::Point>,
     /// Vertices the boundary Laplacian acts on (on the interface, off the border).
     active: Vec<u32>,
     /// Per-vertex, per-phase neighbour sums of the boundary Laplacian.
     slot_sums: Vec<[K::Point; MAXP]>,
     scratch: Vec<K::Point>,
-    star: Vec<CellId>,
-    piece: Vec<usize>,
-    stack: Vec<usize>,
-    labels: Vec<Label>,
+    classify: ClassifyScratch,
     /// Total measure of the interface (length in 2D), from the last computation.
     pub interface_measure: f64,
     /// Number of triple junctions and crossings seen in the last computation.
@@ -149,13 +151,11 @@ impl<K: Raster> ForceField<K> {
             bending: Vec::new(),
             stretching: Vec::new(),
             facets: Vec::new(),
+            sampled: FacetSamples::default(),
             active: Vec::new(),
             slot_sums: Vec::new(),
             scratch: Vec::new(),
-            star: Vec::new(),
-            piece: Vec::new(),
-            stack: Vec::new(),
-            labels: Vec::new(),
+            classify: ClassifyScratch::default(),
             interface_measure: 0.0,
             junctions: (0, 0),
         }
@@ -164,60 +164,6 @@ impl<K: Raster> ForceField<K> {
     /// The force kind of `v` from the last computation.
     pub fn kind(&self, v: VertexId) -> ForceKind {
         self.kinds.get(v.index()).copied().unwrap_or(ForceKind::Off)
-    }
-
-    /// Pieces and distinct labels around `v` with the reusable buffers.
-    fn classify(&mut self, complex: &Complex<K>, v: VertexId) -> ForceKind {
-        let class = complex.class(v);
-        match class.kind {
-            VertexKind::Interior => return ForceKind::Off,
-            // 3D: a two-piece star can still sit on an edge with more than two
-            // interface triangles (two sheets of a phase touching): a crossing.
-            VertexKind::Interface if complex.has_junction_edge_with(v, &mut self.star) => {
-                return ForceKind::Crossing
-            }
-            VertexKind::Interface => return ForceKind::Interface,
-            VertexKind::Junction => {}
-        }
-        complex.star_into(v, &mut self.star);
-        self.piece.clear();
-        self.piece.resize(self.star.len(), usize::MAX);
-        let mut pieces = 0;
-        for start in 0..self.star.len() {
-            if self.piece[start] != usize::MAX {
-                continue;
-            }
-            self.piece[start] = pieces;
-            self.stack.clear();
-            self.stack.push(start);
-            while let Some(i) = self.stack.pop() {
-                let c = self.star[i];
-                let label = complex.label(c);
-                for (local, nb) in complex.neighbours(c).iter().enumerate() {
-                    let Some(nb) = *nb else { continue };
-                    if complex.cell(c)[local] == v || complex.label(nb) != label {
-                        continue;
-                    }
-                    if let Some(j) = self.star.iter().position(|&s| s == nb) {
-                        if self.piece[j] == usize::MAX {
-                            self.piece[j] = pieces;
-                            self.stack.push(j);
-                        }
-                    }
-                }
-            }
-            pieces += 1;
-        }
-        self.labels.clear();
-        self.labels
-            .extend(self.star.iter().map(|&c| complex.label(c)));
-        self.labels.sort_unstable();
-        self.labels.dedup();
-        if pieces == self.labels.len() && pieces <= MAXP {
-            ForceKind::TripleJunction
-        } else {
-            ForceKind::Crossing
-        }
     }
 
     /// Computes the external, bending and stretching terms of every vertex of
@@ -261,13 +207,27 @@ impl<K: Raster> ForceField<K> {
         self.junctions = (0, 0);
         self.kinds.clear();
         self.kinds.resize(nv, ForceKind::Off);
-        for i in 0..nv {
+        let classify_into = |sc: &mut ClassifyScratch, (i, kind): (usize, &mut ForceKind)| {
             let v = VertexId(i as u32);
-            if !complex.is_vertex_alive(v) {
-                continue;
+            if complex.is_vertex_alive(v) {
+                *kind = classify_vertex(complex, v, sc);
             }
-            let kind = self.classify(complex, v);
-            self.kinds[i] = kind;
+        };
+        if K::N == 3 && rayon::current_num_threads() > 1 {
+            // (each vertex's kind alone: the same kinds on any number of threads)
+            self.kinds
+                .par_iter_mut()
+                .enumerate()
+                .for_each_init(ClassifyScratch::default, classify_into);
+        } else {
+            let sc = &mut self.classify;
+            self.kinds
+                .iter_mut()
+                .enumerate()
+                .for_each(|entry| classify_into(sc, entry));
+        }
+        for i in 0..nv {
+            let kind = self.kinds[i];
             if kind == ForceKind::Off {
                 // Only the interface's accumulators are read: the rest of
                 // them (most) are not touched, nor reset.
@@ -278,8 +238,8 @@ impl<K: Raster> ForceField<K> {
                 ForceKind::TripleJunction => {
                     self.junctions.0 += 1;
                     // slots in increasing label order, for eq. (7)
-                    for k in 0..self.labels.len() {
-                        let l = self.labels[k];
+                    let labels = self.classify.star_labels(complex, VertexId(i as u32));
+                    for &l in labels {
                         self.acc[i].slot(l);
                     }
                 }
@@ -303,11 +263,54 @@ impl<K: Raster> ForceField<K> {
         self.interface_measure = 0.0;
         // The sample spacing in the image's unit, once for every facet.
         let spacing = s.spacing * image.sample_step();
+        if K::N == 3 && rayon::current_num_threads() > 1 {
+            self.integrate_facets_sampled_ahead(complex, image, phases, s, spacing);
+            return;
+        }
+        let mut samples = std::mem::take(&mut self.sampled.samples);
         for facet in complex.interface_facets() {
             self.interface_measure += facet.measure;
             self.add_facet_topology(&facet);
-            self.add_region_force(&facet, image, phases, s, spacing);
+            samples.clear();
+            if let Some(means) = region_means(&facet, phases, s) {
+                sample_facet::<K>(&facet, image, spacing, &mut samples);
+                self.add_region_force(&facet, means, &samples, phases, s);
+            }
         }
+        self.sampled.samples = samples;
+    }
+
+    /// [`integrate_facets`](Self::integrate_facets) with the image sampled
+    /// ahead, block by block of facets, on rayon's threads (3D, where the
+    /// samples of a large interface are most of the forces' time). The
+    /// samples are those the facets take one after the other and they are
+    /// added in the same order, so the forces are the same to the bit on any
+    /// number of threads.
+    fn integrate_facets_sampled_ahead(
+        &mut self,
+        complex: &Complex<K>,
+        image: &ImageView<'_>,
+        phases: &PhaseStats,
+        s: &ForceSettings,
+        spacing: f64,
+    ) {
+        let mut sampled = std::mem::take(&mut self.sampled);
+        let mut listed = complex.interface_facets();
+        loop {
+            sampled.list_block(&mut listed);
+            if sampled.block.is_empty() {
+                break;
+            }
+            sampled.sample_block::<K>(image, phases, s, spacing);
+            for (facet, samples) in sampled.block_samples() {
+                self.interface_measure += facet.measure;
+                self.add_facet_topology(facet);
+                if let Some(means) = region_means(facet, phases, s) {
+                    self.add_region_force(facet, means, samples, phases, s);
+                }
+            }
+        }
+        self.sampled = sampled;
     }
 
     /// Records `facet` and adds, at its corners, the boundary neighbours of
@@ -358,46 +361,34 @@ impl<K: Raster> ForceField<K> {
         }
     }
 
-    /// The region force of eqs. (5)–(7) sampled every `spacing` (in the
-    /// image's unit) along `facet` and spread
-    /// over its corners with the hat weights: along the normal at two-phase
-    /// vertices, as eq. (7) weights (or along the normal, per
-    /// [`JunctionForce`]) at triple junctions. Nothing where the two phases'
-    /// means are missing or equal.
+    /// The region force of eqs. (5)–(7) at the image `samples` of `facet`
+    /// (see [`sample_facet`]), spread over its corners with the hat
+    /// weights: along the normal at two-phase vertices, as eq. (7) weights
+    /// (or along the normal, per [`JunctionForce`]) at triple junctions.
+    /// `means` are the two phases' means ([`region_means`]).
     #[allow(clippy::needless_range_loop)] // corners and weights are indexed in pairs
     fn add_region_force(
         &mut self,
         facet: &InterfaceFacet<K::Point>,
-        image: &ImageView<'_>,
+        (ma, mb): (f64, f64),
+        samples: &[FacetSample],
         phases: &PhaseStats,
         s: &ForceSettings,
-        spacing: f64,
     ) {
         let nf = K::N; // corners per facet
         let InterfaceFacet {
-            a,
-            b,
-            corners,
-            points: cpts,
-            normal,
-            ..
+            corners, normal, ..
         } = *facet;
-        let (Some(ma), Some(mb)) = (phases.mean_of(a), phases.mean_of(b)) else {
-            return;
-        };
         let gap = ma - mb;
-        if gap.abs() < s.equal_means {
-            return; // equal means: eq. (6) undefined, no region force
-        }
         let (acc, kinds) = (&mut self.acc, &self.kinds);
-        K::facet_samples(&cpts[..nf], spacing, &mut |p, w, ds| {
-            let intensity = K::sample(image, p);
+        for sample in samples {
+            let intensity = sample.intensity;
             let f = match s.model {
                 ForceModel::Normalised => (2.0 * intensity - ma - mb) / gap,
                 ForceModel::ChanVese => (2.0 * intensity - ma - mb) * gap,
             };
             for k in 0..nf {
-                let wk = w[k] * ds;
+                let wk = sample.weights[k] * sample.ds;
                 let ac = &mut acc[corners[k].index()];
                 match kinds[corners[k].index()] {
                     ForceKind::Interface => {
@@ -414,7 +405,7 @@ impl<K: Raster> ForceField<K> {
                     _ => {}
                 }
             }
-        });
+        }
     }
 
     /// Stage 3: the umbrella `ΔX` and the bending direction `−Δ²X`, the
@@ -562,6 +553,215 @@ impl<K: Raster> ForceField<K> {
     }
 }
 
+/// The buffers of [`classify_vertex`].
+#[derive(Clone, Debug, Default)]
+struct ClassifyScratch {
+    star: Vec<CellId>,
+    piece: Vec<usize>,
+    stack: Vec<usize>,
+    labels: Vec<Label>,
+}
+
+impl ClassifyScratch {
+    /// The distinct labels of the cells around `v`, in increasing order.
+    fn star_labels<K: Dim>(&mut self, complex: &Complex<K>, v: VertexId) -> &[Label] {
+        complex.star_into(v, &mut self.star);
+        self.labels_of_star(complex)
+    }
+
+    /// The distinct labels of the cells in `star`, in increasing order.
+    fn labels_of_star<K: Dim>(&mut self, complex: &Complex<K>) -> &[Label] {
+        self.labels.clear();
+        self.labels
+            .extend(self.star.iter().map(|&c| complex.label(c)));
+        self.labels.sort_unstable();
+        self.labels.dedup();
+        &self.labels
+    }
+}
+
+/// What `v` is for the forces: off the interface, between two phases, a
+/// triple junction (as many same-label pieces around it as distinct
+/// labels, at most [`MAXP`]) or a crossing.
+fn classify_vertex<K: Dim>(
+    complex: &Complex<K>,
+    v: VertexId,
+    sc: &mut ClassifyScratch,
+) -> ForceKind {
+    let class = complex.class(v);
+    match class.kind {
+        VertexKind::Interior => return ForceKind::Off,
+        // 3D: a two-piece star can still sit on an edge with more than two
+        // interface triangles (two sheets of a phase touching): a crossing.
+        VertexKind::Interface if complex.has_junction_edge_with(v, &mut sc.star) => {
+            return ForceKind::Crossing
+        }
+        VertexKind::Interface => return ForceKind::Interface,
+        VertexKind::Junction => {}
+    }
+    complex.star_into(v, &mut sc.star);
+    sc.piece.clear();
+    sc.piece.resize(sc.star.len(), usize::MAX);
+    let mut pieces = 0;
+    for start in 0..sc.star.len() {
+        if sc.piece[start] != usize::MAX {
+            continue;
+        }
+        sc.piece[start] = pieces;
+        sc.stack.clear();
+        sc.stack.push(start);
+        while let Some(i) = sc.stack.pop() {
+            let c = sc.star[i];
+            let label = complex.label(c);
+            for (local, nb) in complex.neighbours(c).iter().enumerate() {
+                let Some(nb) = *nb else { continue };
+                if complex.cell(c)[local] == v || complex.label(nb) != label {
+                    continue;
+                }
+                if let Some(j) = sc.star.iter().position(|&s| s == nb) {
+                    if sc.piece[j] == usize::MAX {
+                        sc.piece[j] = pieces;
+                        sc.stack.push(j);
+                    }
+                }
+            }
+        }
+        pieces += 1;
+    }
+    let labels = sc.labels_of_star(complex).len();
+    if pieces == labels && pieces <= MAXP {
+        ForceKind::TripleJunction
+    } else {
+        ForceKind::Crossing
+    }
+}
+
+/// The means of `facet`'s two phases, or `None` where one is missing or
+/// the two are equal (eq. 6 undefined: no region force across the facet).
+fn region_means<P: Point>(
+    facet: &InterfaceFacet<P>,
+    phases: &PhaseStats,
+    s: &ForceSettings,
+) -> Option<(f64, f64)> {
+    let (ma, mb) = (phases.mean_of(facet.a)?, phases.mean_of(facet.b)?);
+    let equal = (ma - mb).abs() < s.equal_means;
+    (!equal).then_some((ma, mb))
+}
+
+/// One image sample of an interface facet: the interpolated intensity, the
+/// hat weights of the facet's corners at the sample and the measure the
+/// sample stands for.
+#[derive(Clone, Copy, Debug, Default)]
+struct FacetSample {
+    intensity: f64,
+    weights: [f64; 3],
+    ds: f64,
+}
+
+/// Appends the image samples of `facet`, every `spacing` along it (in the
+/// image's unit), to `out`.
+fn sample_facet<K: Raster>(
+    facet: &InterfaceFacet<K::Point>,
+    image: &ImageView<'_>,
+    spacing: f64,
+    out: &mut Vec<FacetSample>,
+) {
+    K::facet_samples(&facet.points[..K::N], spacing, &mut |p, w, ds| {
+        let mut weights = [0.0; 3];
+        weights[..w.len()].copy_from_slice(w);
+        out.push(FacetSample {
+            intensity: K::sample(image, p),
+            weights,
+            ds,
+        });
+    });
+}
+
+/// Interface facets listed in blocks and their image samples, taken on
+/// rayon's threads a block at a time (a block bounds the memory the samples
+/// take: a 3D facet of a few voxels² has a few dozen).
+#[derive(Clone, Debug)]
+struct FacetSamples<P> {
+    /// The facets of the current block, in the order of
+    /// [`Complex::interface_facets`].
+    block: Vec<InterfaceFacet<P>>,
+    /// Per chunk of the block, the samples of its facets one after the other.
+    chunks: Vec<SampledChunk>,
+    /// The serial path's samples of one facet.
+    samples: Vec<FacetSample>,
+}
+
+impl<P> Default for FacetSamples<P> {
+    fn default() -> Self {
+        FacetSamples {
+            block: Vec::new(),
+            chunks: Vec::new(),
+            samples: Vec::new(),
+        }
+    }
+}
+
+/// The samples of consecutive facets and where each facet's end.
+#[derive(Clone, Debug, Default)]
+struct SampledChunk {
+    samples: Vec<FacetSample>,
+    ends: Vec<usize>,
+}
+
+/// Facets per block of [`FacetSamples`].
+const FACET_BLOCK: usize = 1024;
+/// Facets per chunk, the unit of work of one thread.
+const FACET_CHUNK: usize = 64;
+
+impl<P: Point> FacetSamples<P> {
+    /// Lists the next block of facets from `facets` (empty at the end).
+    fn list_block<K: Dim<Point = P>>(&mut self, facets: &mut InterfaceFacets<'_, K>) {
+        self.block.clear();
+        self.block.extend(facets.by_ref().take(FACET_BLOCK));
+    }
+
+    /// Samples the facets of the block whose phases have distinct means,
+    /// chunk by chunk on rayon's threads.
+    fn sample_block<K: Raster<Point = P>>(
+        &mut self,
+        image: &ImageView<'_>,
+        phases: &PhaseStats,
+        s: &ForceSettings,
+        spacing: f64,
+    ) {
+        let chunks = self.block.len().div_ceil(FACET_CHUNK);
+        if self.chunks.len() < chunks {
+            self.chunks.resize(chunks, SampledChunk::default());
+        }
+        self.block
+            .par_chunks(FACET_CHUNK)
+            .zip(self.chunks.par_iter_mut())
+            .for_each(|(facets, chunk)| {
+                chunk.samples.clear();
+                chunk.ends.clear();
+                for facet in facets {
+                    if region_means(facet, phases, s).is_some() {
+                        sample_facet::<K>(facet, image, spacing, &mut chunk.samples);
+                    }
+                    chunk.ends.push(chunk.samples.len());
+                }
+            });
+    }
+
+    /// Each facet of the block with its samples, in order.
+    fn block_samples(&self) -> impl Iterator<Item = (&InterfaceFacet<P>, &[FacetSample])> + '_ {
+        self.block
+            .chunks(FACET_CHUNK)
+            .zip(&self.chunks)
+            .flat_map(|(facets, chunk)| {
+                facets.iter().enumerate().map(move |(i, facet)| {
+                    let start = if i == 0 { 0 } else { chunk.ends[i - 1] };
+                    (facet, &chunk.samples[start..chunk.ends[i]])
+                })
+            })
+    }
+}
+
 /// Eq. (7): of the phases around the junction, the two whose means bracket
 /// `intensity` share the weight linearly in `intensity`; below (above) every
 /// mean the lowest (highest) phase takes it all.
@@ -594,7 +794,74 @@ fn junction_weights<P: Point>(acc: &mut Acc<P>, phases: &PhaseStats, intensity: 
 
 #[cfg(test)]
 pub(crate) mod tests {
+    use super::*;
+    use crate::dim::D3;
     use std::cell::Cell;
+
+    /// The forces of a 24³ box meshed at edge length 1.5 holding three
+    /// phases (a ball cut in two halves on a background: more than one block
+    /// of facets, triple junctions along the cut's rim), on `threads` threads.
+    fn forces_on(threads: usize) -> ForceField<D3> {
+        let n = 24;
+        let mut complex = Complex::<D3>::cuboid([n as f64; 3], 1.5).unwrap();
+        let centre = n as f64 / 2.0;
+        let changes: Vec<(CellId, Label)> = complex
+            .cell_ids()
+            .filter_map(|c| {
+                let points = complex.cell_points(c);
+                let mid = (points[0] + points[1] + points[2] + points[3]) * 0.25;
+                let inside = (mid - nalgebra::Vector3::repeat(centre)).norm() < 7.0;
+                inside.then_some((c, if mid.x < centre { 1 } else { 2 }))
+            })
+            .collect();
+        complex.set_labels(&changes);
+        let voxels: Vec<f32> = (0..n * n * n)
+            .map(|i| ((i * 7919) % 1009) as f32 / 1009.0)
+            .collect();
+        let image = ImageView::new_3d([n, n, n], &voxels).unwrap();
+        let mut phases = PhaseStats::new(3);
+        phases.mean = vec![Some(0.2), Some(0.5), Some(0.8)];
+        let settings = ForceSettings {
+            model: ForceModel::Normalised,
+            junction: JunctionForce::Paper,
+            spacing: 0.5,
+            equal_means: 1e-6,
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut field = ForceField::new();
+            field.compute(&complex, &image, &phases, &settings);
+            field
+        })
+    }
+
+    #[test]
+    fn forces_are_the_same_bits_on_one_and_two_threads() {
+        let (one, two) = (forces_on(1), forces_on(2));
+        assert!(
+            one.facets.len() > FACET_BLOCK,
+            "{} facets",
+            one.facets.len()
+        );
+        assert!(one.junctions.0 > 0, "no triple junction");
+        let bits = |f: &ForceField<D3>| -> Vec<u64> {
+            [&f.external, &f.bending, &f.stretching]
+                .iter()
+                .flat_map(|field| field.iter().flat_map(|p| p.iter().map(|x| x.to_bits())))
+                .collect()
+        };
+        assert!(one.external.iter().any(|p| p.norm() > 0.0));
+        assert_eq!(one.kinds, two.kinds);
+        assert_eq!(one.junctions, two.junctions);
+        assert_eq!(
+            one.interface_measure.to_bits(),
+            two.interface_measure.to_bits()
+        );
+        assert_eq!(bits(&one), bits(&two));
+    }
 
     thread_local! {
         /// How many times [`super::ForceField::compute`] ran on this thread.
