@@ -15,6 +15,12 @@ use smallvec::SmallVec;
 /// stars would visit every cell of the mesh several times over.
 const SEEDS_FOR_A_SCAN: usize = 8;
 
+/// A 3D region of at least this many seeds (and fewer than a scan takes)
+/// has its seeds' stars searched on rayon's threads.
+const PARALLEL_REGION_FROM: usize = 512;
+/// Seeds per chunk of that search.
+const REGION_CHUNK: usize = 128;
+
 /// The dimension-specific connectivity improvement (2D edge flips, 3D flips).
 pub trait Connectivity: Dim {
     /// Improves the connectivity of the cells of `region` (flips, at most a
@@ -397,17 +403,37 @@ impl<K: Connectivity> Complex<K> {
             return;
         }
         marks.resize(self.cell_capacity(), false);
-        for &v in seeds {
-            if !self.is_vertex_alive(v) {
-                continue;
-            }
-            self.star_into(v, star);
-            for &c in star.iter() {
+        let mut take = |cells: &[CellId]| {
+            for &c in cells {
                 if !marks[c.index()] {
                     marks[c.index()] = true;
                     out.push(c);
                 }
             }
+        };
+        if K::N == 3 && seeds.len() >= PARALLEL_REGION_FROM && rayon::current_num_threads() > 1 {
+            // The stars searched on rayon's threads, a chunk of seeds each,
+            // then taken in seed order: the region of the loop below.
+            let stars: Vec<Vec<CellId>> = seeds
+                .par_chunks(REGION_CHUNK)
+                .map_init(Vec::new, |star, chunk| {
+                    let mut cells = Vec::with_capacity(chunk.len() * 24);
+                    for &v in chunk.iter().filter(|&&v| self.is_vertex_alive(v)) {
+                        self.star_into(v, star);
+                        cells.extend_from_slice(star);
+                    }
+                    cells
+                })
+                .collect();
+            stars.iter().for_each(|cells| take(cells));
+            return;
+        }
+        for &v in seeds {
+            if !self.is_vertex_alive(v) {
+                continue;
+            }
+            self.star_into(v, star);
+            take(star);
         }
     }
 
