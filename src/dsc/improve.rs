@@ -20,6 +20,9 @@ const SEEDS_FOR_A_SCAN: usize = 8;
 const PARALLEL_REGION_FROM: usize = 512;
 /// Seeds per chunk of that search.
 const REGION_CHUNK: usize = 128;
+/// About how many tetrahedra share a vertex of a graded 3D mesh: the
+/// capacity a chunk's stars are collected in.
+const CELLS_PER_STAR_3D: usize = 24;
 
 /// The dimension-specific connectivity improvement (2D edge flips, 3D flips).
 pub trait Connectivity: Dim {
@@ -417,7 +420,7 @@ impl<K: Connectivity> Complex<K> {
             let stars: Vec<Vec<CellId>> = seeds
                 .par_chunks(REGION_CHUNK)
                 .map_init(Vec::new, |star, chunk| {
-                    let mut cells = Vec::with_capacity(chunk.len() * 24);
+                    let mut cells = Vec::with_capacity(chunk.len() * CELLS_PER_STAR_3D);
                     for &v in chunk.iter().filter(|&&v| self.is_vertex_alive(v)) {
                         self.star_into(v, star);
                         cells.extend_from_slice(star);
@@ -724,6 +727,38 @@ impl<K: Connectivity> Complex<K> {
 mod tests {
     use super::*;
     use nalgebra::Vector2;
+
+    /// The 3D region of a large seed set searched on rayon's threads is the
+    /// one-thread loop's, cell for cell and in order, with seeds in any
+    /// order and some repeated.
+    #[test]
+    fn a_large_region_is_the_same_on_one_and_two_threads() {
+        let complex = Complex::<D3>::cuboid([30.0; 3], 1.5).unwrap();
+        let vertices: Vec<VertexId> = complex.vertex_ids().collect();
+        for count in [PARALLEL_REGION_FROM - 1, PARALLEL_REGION_FROM, 1500] {
+            let mut seeds: Vec<VertexId> = vertices
+                .iter()
+                .rev()
+                .step_by(3)
+                .take(count)
+                .copied()
+                .collect();
+            seeds.extend_from_within(..10);
+            assert!(seeds.len() * SEEDS_FOR_A_SCAN < complex.cell_count());
+            let region_on = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| {
+                    let (mut out, mut marks) = (Vec::new(), Vec::new());
+                    complex.region_cells(&seeds, &mut out, &mut marks);
+                    out
+                })
+            };
+            assert_eq!(region_on(1), region_on(2), "{count} seeds");
+        }
+    }
 
     /// `degenerate_near` with one memo across rounds of moves answers what
     /// listing the grown region and testing every cell of it answers.

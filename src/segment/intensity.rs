@@ -132,15 +132,18 @@ fn quantile(keys: &mut [i32], q: f64) -> f64 {
     from_order_key(*x) as f64
 }
 
-/// The quantiles `q[0] ≤ q[1]` of the samples whose order keys are `keys`
-/// (reordered in place), as [`quantile`] gives each: the second is
-/// selected among the keys the first left above it.
+/// The quantiles `q[0] ≤ q[1]` (asserted) of the samples whose order keys
+/// are `keys` (reordered in place), as [`quantile`] gives each: the second
+/// is selected among the keys the first left above it.
 fn quantile_pair(keys: &mut [i32], q: [f64; 2]) -> [f64; 2] {
     if keys.is_empty() {
         return [0.0; 2];
     }
     let (k0, k1) = (rank(keys.len(), q[0]), rank(keys.len(), q[1]));
-    debug_assert!(k0 <= k1);
+    assert!(
+        k0 <= k1,
+        "quantile_pair takes its quantiles in increasing order"
+    );
     let (_, x0, above) = keys.select_nth_unstable(k0);
     let x0 = *x0;
     let x1 = if k1 == k0 {
