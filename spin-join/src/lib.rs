@@ -8,7 +8,17 @@
 //! than the section saves. The helper instead spins (yielding the core to
 //! any other runnable thread) for [`SPIN`] after each job, so a
 //! [`join`](SpinHelper::join) costs about a cache-line round trip; then it
-//! parks, so a finished or idle run does not keep a core busy.
+//! parks, so a finished or idle run does not keep a core busy. A job the
+//! helper has not started by the time the caller's own half is done is taken
+//! back and run by the caller: on a machine whose cores are busy with other
+//! work the helper may wait milliseconds for a core, and the caller would
+//! otherwise wait with it. A helper that is late (it did not start within a
+//! caller's half longer than [`LATE`], or it finished its half more than
+//! [`LATE`], and more than the caller's own half took, after the caller: it
+//! lost its core) is not used for [`REST`]: joins run both halves on the
+//! caller meanwhile, as one thread would, and the helper parks instead of
+//! competing with the caller and the machine's other work for a core; then it
+//! is tried again.
 //!
 //! Large batches (3D, first integrations) still go to rayon, which scales
 //! past two threads.
@@ -16,7 +26,7 @@
 //! This is the only `unsafe` code of dsc-seg (whose crate forbids it): the
 //! job a helper runs borrows from the caller's stack frame, and
 //! [`join`](SpinHelper::join) does not return, nor unwind, before that job
-//! has finished.
+//! has finished or been taken back unstarted.
 #![warn(missing_docs)]
 
 use std::cell::Cell;
@@ -29,6 +39,17 @@ use std::time::{Duration, Instant};
 /// How long the helper keeps spinning after its last job before it parks.
 pub const SPIN: Duration = Duration::from_millis(5);
 
+/// How much longer than the caller's own half a join may wait for the
+/// helper before the helper counts as late (it lost its core): far more than
+/// the halves of one section differ by, far less than a scheduler's time
+/// slice.
+pub const LATE: Duration = Duration::from_micros(200);
+
+/// How long a late helper is left unused: joins run both halves on the
+/// caller meanwhile (a 2D run of a 256² or 512² image takes about this long
+/// or less).
+pub const REST: Duration = Duration::from_millis(250);
+
 /// A second thread for [`join`](Self::join), or none (then `join` runs both
 /// halves on the caller's thread).
 ///
@@ -38,6 +59,8 @@ pub struct SpinHelper {
     /// Whether a job is in flight: a `join` inside a `join`'s first closure
     /// then runs both of its closures on the caller (not `Sync`: one caller).
     busy: Cell<bool>,
+    /// Until when the helper rests after it was late (see [`REST`]).
+    resting_until: Cell<Option<Instant>>,
 }
 
 struct Worker {
@@ -60,6 +83,8 @@ struct Shared {
 
 /// A type-erased pointer to a [`Packet`] on the poster's stack.
 struct Job {
+    /// The job's sequence number (the one `join` waits for).
+    seq: u64,
     packet: *mut (),
     run: unsafe fn(*mut ()),
 }
@@ -103,6 +128,7 @@ impl SpinHelper {
         SpinHelper {
             worker: None,
             busy: Cell::new(false),
+            resting_until: Cell::new(None),
         }
     }
 
@@ -123,6 +149,7 @@ impl SpinHelper {
         Ok(SpinHelper {
             worker: Some(Worker { shared, thread }),
             busy: Cell::new(false),
+            resting_until: Cell::new(None),
         })
     }
 
@@ -131,21 +158,43 @@ impl SpinHelper {
         self.worker.is_some()
     }
 
+    /// Leaves the helper unused for [`REST`].
+    fn rest(&self) {
+        self.resting_until.set(Some(Instant::now() + REST));
+    }
+
+    /// Whether the helper is resting after it was late (see [`REST`]).
+    pub fn is_resting(&self) -> bool {
+        self.resting_until
+            .get()
+            .is_some_and(|until| Instant::now() < until)
+    }
+
     /// Runs `a` on this thread and `b` on the helper, at the same time, and
-    /// returns both results (without a helper: `a` then `b`). A panic in
-    /// either is resumed here once both have finished.
+    /// returns both results (without a helper: `a` then `b`). If the helper
+    /// has not started `b` when `a` returns, `b` is taken back and runs here
+    /// after `a` (the helper may be waiting for a core). A panic in either
+    /// is resumed here once both have finished (a panic in `a` drops a `b`
+    /// not yet started instead).
     ///
     /// The caller waits for `b` without doing other work: `b` must not
     /// wait for a thread pool the caller belongs to (e.g. rayon work posted
     /// from `b` while the caller is one of rayon's workers, all of which
     /// may be waiting so).
+    ///
+    /// A helper that was late (see [`LATE`]) rests for [`REST`]: meanwhile
+    /// both halves run here, `a` then `b`.
     pub fn join<A, B, RA, RB>(&self, a: A, b: B) -> (RA, RB)
     where
         A: FnOnce() -> RA,
         B: FnOnce() -> RB + Send,
         RB: Send,
     {
-        let Some(worker) = self.worker.as_ref().filter(|_| !self.busy.get()) else {
+        let Some(worker) = self
+            .worker
+            .as_ref()
+            .filter(|_| !self.busy.get() && !self.is_resting())
+        else {
             let ra = a();
             return (ra, b());
         };
@@ -154,19 +203,32 @@ impl SpinHelper {
             work: Some(b),
             outcome: None,
         };
-        let seq = worker.post(Job {
-            packet: &mut packet as *mut Packet<B, RB> as *mut (),
-            run: run_packet::<B, RB>,
-        });
-        // Waits for the helper even if `a` unwinds: `packet` lives on this
-        // stack frame.
+        let seq = worker.post(
+            &mut packet as *mut Packet<B, RB> as *mut (),
+            run_packet::<B, RB>,
+        );
+        // Takes the job back or waits for the helper even if `a` unwinds:
+        // `packet` lives on this stack frame.
         let wait = WaitFor {
             shared: &worker.shared,
             seq,
             busy: &self.busy,
         };
+        let start = Instant::now();
         let ra = a();
+        let own_half = start.elapsed();
         drop(wait);
+        if let Some(b) = packet.work.take() {
+            // Taken back before the helper started it (late, unless `a`
+            // was too short for the helper to wake).
+            if own_half > LATE {
+                self.rest();
+            }
+            return (ra, b());
+        }
+        if start.elapsed() - own_half > own_half.max(LATE) {
+            self.rest();
+        }
         match packet.outcome.take() {
             Some(Ok(rb)) => (ra, rb),
             Some(Err(panic)) => resume_unwind(panic),
@@ -190,12 +252,12 @@ impl std::fmt::Debug for SpinHelper {
 }
 
 impl Worker {
-    /// Publishes `job` and wakes the helper if it parked; returns the job's
-    /// sequence number.
-    fn post(&self, job: Job) -> u64 {
+    /// Publishes the job of `packet` and wakes the helper if it parked;
+    /// returns the job's sequence number.
+    fn post(&self, packet: *mut (), run: unsafe fn(*mut ())) -> u64 {
         let shared = &self.shared;
-        *shared.job.lock().unwrap_or_else(PoisonError::into_inner) = Some(job);
         let seq = shared.posted.load(Ordering::Relaxed) + 1;
+        *shared.job.lock().unwrap_or_else(PoisonError::into_inner) = Some(Job { seq, packet, run });
         shared.posted.store(seq, Ordering::SeqCst);
         if shared.sleeping.load(Ordering::SeqCst) {
             self.thread.thread().unpark();
@@ -214,16 +276,37 @@ impl Drop for SpinHelper {
     }
 }
 
-/// Blocks, on drop, until the helper has finished job `seq`; then frees
-/// the helper for the next `join`.
+/// On drop, takes job `seq` back if the helper has not started it, or
+/// else blocks until the helper has finished it; then frees the helper for
+/// the next `join`.
 struct WaitFor<'a> {
     shared: &'a Shared,
     seq: u64,
     busy: &'a Cell<bool>,
 }
 
+impl WaitFor<'_> {
+    /// Removes job `seq` from the slot if it is still there (not started).
+    fn take_back(&self) -> bool {
+        let mut slot = self
+            .shared
+            .job
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        let ours = slot.as_ref().is_some_and(|job| job.seq == self.seq);
+        if ours {
+            *slot = None;
+        }
+        ours
+    }
+}
+
 impl Drop for WaitFor<'_> {
     fn drop(&mut self) {
+        if self.take_back() {
+            self.busy.set(false);
+            return;
+        }
         // Yields now and then: should the helper share this core, it runs.
         while self.shared.finished.load(Ordering::Acquire) != self.seq {
             for _ in 0..64 {
@@ -247,17 +330,19 @@ fn work_loop(shared: &Shared) {
         let posted = shared.posted.load(Ordering::Acquire);
         if posted != seen {
             seen = posted;
+            // (empty when the poster took its job back)
             let job = shared
                 .job
                 .lock()
                 .unwrap_or_else(PoisonError::into_inner)
                 .take();
             if let Some(job) = job {
-                // SAFETY: `join` posted a live packet and waits for
-                // `finished` before it touches or frees it.
+                // SAFETY: `join` posted a live packet and, having found the
+                // slot empty, waits for `finished` to reach the job's number
+                // before it touches or frees it.
                 unsafe { (job.run)(job.packet) };
+                shared.finished.store(job.seq, Ordering::Release);
             }
-            shared.finished.store(seen, Ordering::Release);
             last_job = Instant::now();
         } else if last_job.elapsed() < SPIN {
             // Yield: on a busy machine the core goes to whoever needs it.
@@ -309,19 +394,101 @@ mod tests {
         assert!(out[..500].iter().all(|&x| x == 1) && out[500..].iter().all(|&x| x == 2));
     }
 
+    /// Waits until `flag` is set (by the other half of a join).
+    fn wait_for(flag: &AtomicBool) {
+        while !flag.load(Ordering::SeqCst) {
+            thread::yield_now();
+        }
+    }
+
     #[test]
     fn a_join_inside_a_join_runs_on_the_caller() {
         let helper = SpinHelper::with_thread().unwrap();
         let outer = thread::current().id();
+        // (`a` waits until `b` has started, so `b` cannot be taken back)
+        let started = AtomicBool::new(false);
         let ((a, b), c) = helper.join(
-            || helper.join(|| thread::current().id(), || thread::current().id()),
-            || thread::current().id(),
+            || {
+                let inner = helper.join(|| thread::current().id(), || thread::current().id());
+                wait_for(&started);
+                inner
+            },
+            || {
+                started.store(true, Ordering::SeqCst);
+                thread::current().id()
+            },
         );
         assert_eq!((a, b), (outer, outer));
         assert_ne!(c, outer);
         // And the helper is free again afterwards.
-        let (_, d) = helper.join(|| (), || thread::current().id());
+        let started = AtomicBool::new(false);
+        let (_, d) = helper.join(
+            || wait_for(&started),
+            || {
+                started.store(true, Ordering::SeqCst);
+                thread::current().id()
+            },
+        );
         assert_ne!(d, outer);
+    }
+
+    #[test]
+    fn every_job_runs_once_whether_taken_back_or_not() {
+        let helper = SpinHelper::with_thread().unwrap();
+        let outer = thread::current().id();
+        let runs = AtomicU64::new(0);
+        let mut taken_back = 0;
+        for round in 0..2_000 {
+            if round % 500 == 0 {
+                // parked: the first job after waking is likely taken back
+                thread::sleep(SPIN * 2);
+            }
+            let (a, (b, on)) = helper.join(
+                || round,
+                || {
+                    runs.fetch_add(1, Ordering::SeqCst);
+                    (round + 1, thread::current().id())
+                },
+            );
+            assert_eq!((a, b), (round, round + 1));
+            taken_back += usize::from(on == outer);
+        }
+        assert_eq!(runs.load(Ordering::SeqCst), 2_000);
+        // Both ways happen on a quiet machine; neither is required.
+        eprintln!("{taken_back} of 2000 jobs taken back");
+    }
+
+    #[test]
+    fn a_late_helper_rests_then_works_again() {
+        let helper = SpinHelper::with_thread().unwrap();
+        let outer = thread::current().id();
+        assert!(!helper.is_resting());
+        // `b` starts on the helper (`a` waits for it) and ends long after `a`.
+        let started = AtomicBool::new(false);
+        let (_, on) = helper.join(
+            || wait_for(&started),
+            || {
+                started.store(true, Ordering::SeqCst);
+                thread::sleep(LATE * 10);
+                thread::current().id()
+            },
+        );
+        assert_ne!(on, outer);
+        assert!(helper.is_resting());
+        // Resting: both halves here.
+        let (a, b) = helper.join(|| thread::current().id(), || thread::current().id());
+        assert_eq!((a, b), (outer, outer));
+        thread::sleep(REST);
+        assert!(!helper.is_resting());
+        let started = AtomicBool::new(false);
+        let (_, on) = helper.join(
+            || wait_for(&started),
+            || {
+                started.store(true, Ordering::SeqCst);
+                thread::current().id()
+            },
+        );
+        assert_ne!(on, outer);
     }
 
     #[test]
@@ -336,11 +503,15 @@ mod tests {
     #[test]
     fn panics_reach_the_caller_after_both_halves_finished() {
         let helper = SpinHelper::with_thread().unwrap();
-        let finished = AtomicBool::new(false);
+        let (started, finished) = (AtomicBool::new(false), AtomicBool::new(false));
         let caught = catch_unwind(AssertUnwindSafe(|| {
             helper.join(
-                || -> () { panic!("in a") },
+                || -> () {
+                    wait_for(&started);
+                    panic!("in a")
+                },
                 || {
+                    started.store(true, Ordering::SeqCst);
                     thread::sleep(Duration::from_millis(20));
                     finished.store(true, Ordering::SeqCst);
                 },

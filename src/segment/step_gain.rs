@@ -65,21 +65,22 @@ impl<P: Point> StepGains<P> {
         let n = displacement.len();
         self.gain.resize(n, 1.0);
         self.previous.resize(n, P::zero());
-        self.next_gain.clear();
         self.next_previous.clear();
-        for (i, d) in displacement.iter_mut().enumerate() {
-            let turn = d.dot(&self.previous[i]);
-            let gain = if turn > 0.0 {
-                (self.gain[i] * GROWTH).min(max_gain)
-            } else {
-                1.0
-            };
-            self.next_gain.push(gain);
-            self.next_previous.push(*d);
-            let length = d.length();
-            let boosted = length * gain;
-            if boosted > length {
-                *d = *d * (boosted.min(cap.max(length)) / length);
+        self.next_previous.extend_from_slice(displacement);
+        self.next_gain.clear();
+        self.next_gain.resize(n, 1.0);
+        let last = self.gain.iter().zip(&self.previous);
+        for ((d, next), (&gain, previous)) in
+            displacement.iter_mut().zip(&mut self.next_gain).zip(last)
+        {
+            // (turned back or at rest: gain 1, the displacement as it is)
+            if d.dot(previous) > 0.0 {
+                *next = (gain * GROWTH).min(max_gain);
+                let length = d.length();
+                let boosted = length * *next;
+                if boosted > length {
+                    *d = *d * (boosted.min(cap.max(length)) / length);
+                }
             }
         }
         self.written = Some((complex.identity(), complex.compactions()));
