@@ -187,7 +187,10 @@ impl Flipper {
     }
 
     /// The label cell `c` flips to, given the labels as they are now (after
-    /// [`prepare`](Self::prepare)).
+    /// [`prepare`](Self::prepare)). Inlined into the sweeps: most cells lie
+    /// inside a phase, with no candidate, and are decided here at the cost of
+    /// a few loads; the others go to [`judge`](Self::judge).
+    #[inline(always)]
     fn target<K: Raster>(
         &self,
         complex: &Complex<K>,
@@ -198,7 +201,7 @@ impl Flipper {
             return None;
         }
         let phases = rule.phases;
-        let st = rule.cells[c.index()];
+        let st = &rule.cells[c.index()];
         let mt = st.mean()?;
         let own = complex.label(c);
         let m_own = phases.mean_of(own)?;
@@ -211,38 +214,54 @@ impl Flipper {
         } else {
             self.dominant[c.index()]
         };
-        match (candidate, rule.guard) {
-            (cand, false) => cand,
-            // Nothing to consider (most cells: inside a phase, no candidate).
-            (None, true) if !has_other_neighbour(complex, c, own) => None,
-            (cand, true) => {
-                // the rule's candidate, or (guarded) the neighbour phase
-                // that lowers the energy most
-                let base = st.sse(m_own);
-                let mut best: Option<(f64, Label)> = None;
-                let mut consider = |l: Label| {
-                    if l == own {
-                        return;
-                    }
-                    let Some(m) = phases.mean_of(l) else { return };
-                    let de = st.sse(m) - base + rule.nu * added_length(complex, c, own, l);
-                    if de < 0.0 && best.is_none_or(|(b, _)| de < b) {
-                        best = Some((de, l));
-                    }
-                };
-                if let Some(t) = cand {
-                    consider(t);
-                }
-                // (tested here first: most cells are inside a phase)
-                for nb in complex.neighbours(c).iter().flatten() {
-                    let l = complex.label(*nb);
-                    if l != own {
-                        consider(l);
-                    }
-                }
-                best.map(|(_, l)| l)
+        if !rule.guard {
+            return candidate;
+        }
+        // Nothing to consider (most cells: inside a phase, no candidate).
+        if candidate.is_none() && !has_other_neighbour(complex, c, own) {
+            return None;
+        }
+        Self::judge(complex, rule, c, own, m_own, candidate)
+    }
+
+    /// The guard's decision for cell `c` of label `own` (phase mean
+    /// `m_own`): the rule's `candidate` or a neighbouring cell's phase,
+    /// whichever lowers the energy most, if any does.
+    #[inline(never)]
+    fn judge<K: Raster>(
+        complex: &Complex<K>,
+        rule: &FlipRule<'_, '_>,
+        c: CellId,
+        own: Label,
+        m_own: f64,
+        candidate: Option<Label>,
+    ) -> Option<Label> {
+        let st = rule.cells[c.index()];
+        let base = st.sse(m_own);
+        let mut best: Option<(f64, Label)> = None;
+        let mut consider = |l: Label| {
+            if l == own {
+                return;
+            }
+            let Some(m) = rule.phases.mean_of(l) else {
+                return;
+            };
+            let de = st.sse(m) - base + rule.nu * added_length(complex, c, own, l);
+            if de < 0.0 && best.is_none_or(|(b, _)| de < b) {
+                best = Some((de, l));
+            }
+        };
+        if let Some(t) = candidate {
+            consider(t);
+        }
+        // (tested here first: most cells are inside a phase)
+        for nb in complex.neighbours(c).iter().flatten() {
+            let l = complex.label(*nb);
+            if l != own {
+                consider(l);
             }
         }
+        best.map(|(_, l)| l)
     }
 
     /// With `once`: whether fewer than half of `c`'s pixels (listed in
@@ -403,6 +422,7 @@ impl Flipper {
 }
 
 /// Whether a neighbour of `c` has a label other than `own`.
+#[inline(always)]
 fn has_other_neighbour<K: Raster>(cx: &Complex<K>, c: CellId, own: Label) -> bool {
     cx.neighbours(c)
         .iter()
