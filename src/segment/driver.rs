@@ -13,6 +13,7 @@ use super::integrate::{CellCache, CellStats, PhaseStats};
 use super::intensity::IntensityStats;
 use super::model::{Flow, IterationState, Models};
 use super::models::{GivenMesh, PaperField, RegionForce, Rigidity};
+use super::noise_correlation::correlated_noise_warning;
 use super::params::{
     contrast_edge_length, contrast_rigidity, sample_step, smallest_extent, SegmentParams,
 };
@@ -1465,6 +1466,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         if stop_reason == StopReason::MaxIterations {
             warnings.push(cap_warning(self.params.max_iterations));
         }
+        warnings.extend(correlated_noise_warning(&self.intensity, &self.phases.mean));
         SegmentReport {
             edge_length: self.dsc.edge_length,
             iterations: self.history.len(),

@@ -9,6 +9,7 @@
 
 use super::image::ImageView;
 use super::integrate::CellStats;
+use super::noise_correlation::noise_correlation;
 use serde::Serialize;
 
 /// Fraction of the samples left out at each end of the robust range.
@@ -16,7 +17,7 @@ pub const ROBUST_TAIL: f64 = 0.001;
 
 /// Largest number of samples the quantiles and the noise estimate read (an
 /// evenly strided subset of larger inputs).
-const MAX_SAMPLES: usize = 1 << 20;
+pub(super) const MAX_SAMPLES: usize = 1 << 20;
 
 /// Number of histogram bins between the robust range's ends.
 pub const HISTOGRAM_BINS: usize = 256;
@@ -36,6 +37,11 @@ pub struct IntensityStats {
     /// neighbouring samples along x (median absolute difference / (0.6745·√2),
     /// robust to edges); 0 for noise-free data.
     pub noise: f64,
+    /// A lower bound of the correlation of neighbouring samples' noise
+    /// (see [`noise_correlation`](super::noise_correlation)): about 0 for
+    /// white noise, high for smoothed noise or texture; `None` for
+    /// noise-free data.
+    pub noise_correlation: Option<f64>,
 }
 
 impl IntensityStats {
@@ -48,12 +54,14 @@ impl IntensityStats {
             // Most samples share one value: fall back on the extremes.
             (low, high) = (min, max);
         }
+        let noise = noise_sigma(image);
         IntensityStats {
             min,
             max,
             low,
             high,
-            noise: noise_sigma(image),
+            noise,
+            noise_correlation: noise_correlation(image, noise),
         }
     }
 

@@ -67,6 +67,7 @@ pub mod intensity;
 pub mod measurements;
 pub mod model;
 pub mod models;
+pub mod noise_correlation;
 mod normal_motion;
 pub mod params;
 pub mod partial_volume;
