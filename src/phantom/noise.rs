@@ -32,6 +32,55 @@ pub fn add_gaussian_noise_f64(image: &mut [f64], sigma: f64, seed: u64) {
     }
 }
 
+/// Adds noise smoothed over a few samples, as a reconstructed CT or MRI
+/// slice has, to the `width`-wide 2D `image`: `N(0, 1)` noise (seeded with
+/// `seed`) blurred `passes` times by a box of 3 samples along x and then y
+/// (edges clamped), scaled to standard deviation `sigma`; then clips to
+/// `[0, 1]`.
+pub fn add_smoothed_noise_2d(
+    image: &mut [f32],
+    width: usize,
+    sigma: f64,
+    passes: usize,
+    seed: u64,
+) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut noise: Vec<f64> = (0..image.len())
+        .map(|_| StandardNormal.sample(&mut rng))
+        .collect();
+    for _ in 0..passes {
+        noise = box_blur_3(&box_blur_3(&noise, width, 1), width, width);
+    }
+    let spread = (noise.iter().map(|v| v * v).sum::<f64>() / noise.len().max(1) as f64).sqrt();
+    for (v, n) in image.iter_mut().zip(&noise) {
+        *v += (sigma * n / spread.max(f64::MIN_POSITIVE)) as f32;
+    }
+    clip_unit(image);
+}
+
+/// The mean of each sample and its neighbours `step` samples before and
+/// after in storage order (`step` 1: along x; `width`: along y), the
+/// neighbours clamped to the image's rows and columns.
+fn box_blur_3(data: &[f64], width: usize, step: usize) -> Vec<f64> {
+    (0..data.len())
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let before = if (step == 1 && x > 0) || (step > 1 && y > 0) {
+                i - step
+            } else {
+                i
+            };
+            let last_row = data.len() / width - 1;
+            let after = if (step == 1 && x + 1 < width) || (step > 1 && y < last_row) {
+                i + step
+            } else {
+                i
+            };
+            (data[before] + data[i] + data[after]) / 3.0
+        })
+        .collect()
+}
+
 /// Clips every sample to `[0, 1]` (NaN becomes 0).
 pub fn clip_unit(image: &mut [f32]) {
     for v in image.iter_mut() {
@@ -56,6 +105,24 @@ pub fn quantize_8bit(image: &mut [f32]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The smoothed noise has the asked spread, and neighbours that share
+    /// most of it.
+    #[test]
+    fn smoothed_noise_is_correlated_at_its_spread() {
+        let side = 128;
+        let mut image = vec![0.5f32; side * side];
+        add_smoothed_noise_2d(&mut image, side, 0.1, 2, 9);
+        let n: Vec<f64> = image.iter().map(|&v| v as f64 - 0.5).collect();
+        let var = n.iter().map(|v| v * v).sum::<f64>() / n.len() as f64;
+        assert!((var.sqrt() - 0.1).abs() < 0.005, "{}", var.sqrt());
+        let neighbours = (0..n.len() - 1)
+            .filter(|i| (i + 1) % side != 0)
+            .map(|i| n[i] * n[i + 1])
+            .sum::<f64>()
+            / (n.len() - side) as f64;
+        assert!(neighbours / var > 0.7, "{}", neighbours / var);
+    }
 
     #[test]
     fn noise_is_deterministic_and_clipped() {

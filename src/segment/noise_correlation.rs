@@ -122,22 +122,13 @@ pub fn correlated_noise_warning(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::phantom::noise::add_gaussian_noise;
+    use crate::phantom::noise::add_smoothed_noise_2d;
 
     const SIDE: usize = 256;
 
-    /// Noise of σ 0.1 on a square of level 0.6 on 0.3 (edges blurred by a
-    /// 3-sample box), the noise smoothed by `passes` box blurs of 3 samples
-    /// along x and y first.
+    /// Noise of σ 0.1 on a square of level 0.6 on 0.3, the noise smoothed by
+    /// `passes` box blurs of 3 samples along x and y first (none: white).
     fn square_with_noise(passes: usize) -> Vec<f32> {
-        // (added to 0.5 and taken back: the noise is clipped to [0, 1])
-        let mut noise = vec![0.5f32; SIDE * SIDE];
-        add_gaussian_noise(&mut noise, 0.1, 3);
-        noise.iter_mut().for_each(|v| *v -= 0.5);
-        for _ in 0..passes {
-            noise = box_blur(&noise);
-        }
-        let spread = (noise.iter().map(|v| v * v).sum::<f32>() / noise.len() as f32).sqrt();
         let mut square: Vec<f32> = (0..SIDE * SIDE)
             .map(|i| {
                 let (x, y) = (i % SIDE, i / SIDE);
@@ -149,29 +140,8 @@ mod tests {
                 }
             })
             .collect();
-        square = box_blur(&square);
+        add_smoothed_noise_2d(&mut square, SIDE, 0.1, passes, 3);
         square
-            .iter()
-            .zip(&noise)
-            .map(|(s, n)| s + 0.1 * n / spread)
-            .collect()
-    }
-
-    /// A box blur of 3 samples along x, then along y (edges clamped).
-    fn box_blur(data: &[f32]) -> Vec<f32> {
-        let at = |d: &[f32], x: isize, y: isize| {
-            let c = |v: isize| v.clamp(0, SIDE as isize - 1) as usize;
-            d[c(y) * SIDE + c(x)]
-        };
-        let along = |d: &[f32], dx: isize, dy: isize| -> Vec<f32> {
-            (0..SIDE * SIDE)
-                .map(|i| {
-                    let (x, y) = ((i % SIDE) as isize, (i / SIDE) as isize);
-                    (at(d, x - dx, y - dy) + at(d, x, y) + at(d, x + dx, y + dy)) / 3.0
-                })
-                .collect()
-        };
-        along(&along(data, 1, 0), 0, 1)
     }
 
     fn correlation_of(data: &[f32]) -> Option<f64> {

@@ -170,52 +170,26 @@ fn bad_option_values_exit_2() {
 }
 
 /// A 192² two-phase image whose noise is smoothed over a few pixels (as a
-/// reconstructed CT or MRI slice's), strong against the gap: σ `sigma`
-/// after smoothing, levels 0.4 and 0.6.
-fn correlated_noise_image(path: &Path, sigma: f32) {
+/// reconstructed CT or MRI slice's), of σ `sigma` after smoothing, levels
+/// 0.4 and 0.6, as 16-bit PNG.
+fn correlated_noise_image(path: &Path, sigma: f64) {
     const SIDE: usize = 192;
-    // (the noise is added to 0.5 and taken back: it is clipped to [0, 1])
-    let mut noise = vec![0.5f32; SIDE * SIDE];
-    dsc_seg::phantom::noise::add_gaussian_noise(&mut noise, 0.1, 5);
-    noise.iter_mut().for_each(|v| *v -= 0.5);
-    for _ in 0..3 {
-        noise = box_blur_3(&noise, SIDE);
-    }
-    let spread = (noise.iter().map(|v| v * v).sum::<f32>() / noise.len() as f32).sqrt();
-    let image: Vec<u16> = noise
-        .iter()
-        .enumerate()
-        .map(|(i, n)| {
+    let mut image: Vec<f32> = (0..SIDE * SIDE)
+        .map(|i| {
             let (x, y) = ((i % SIDE) as f32 - 96.0, (i / SIDE) as f32 - 96.0);
-            let level = if x * x + y * y < 50.0 * 50.0 {
+            if x * x + y * y < 50.0 * 50.0 {
                 0.6
             } else {
                 0.4
-            };
-            ((level + sigma * n / spread).clamp(0.0, 1.0) * 65535.0) as u16
+            }
         })
         .collect();
-    image::ImageBuffer::<image::Luma<u16>, _>::from_raw(SIDE as u32, SIDE as u32, image)
+    dsc_seg::phantom::noise::add_smoothed_noise_2d(&mut image, SIDE, sigma, 3, 5);
+    let samples: Vec<u16> = image.iter().map(|&v| (v * 65535.0) as u16).collect();
+    image::ImageBuffer::<image::Luma<u16>, _>::from_raw(SIDE as u32, SIDE as u32, samples)
         .unwrap()
         .save(path)
         .unwrap();
-}
-
-/// A box blur of 3 pixels along x, then along y (edges clamped).
-fn box_blur_3(data: &[f32], side: usize) -> Vec<f32> {
-    let at = |d: &[f32], x: isize, y: isize| {
-        let c = |v: isize| v.clamp(0, side as isize - 1) as usize;
-        d[c(y) * side + c(x)]
-    };
-    let along = |d: &[f32], dx: isize, dy: isize| -> Vec<f32> {
-        (0..side * side)
-            .map(|i| {
-                let (x, y) = ((i % side) as isize, (i / side) as isize);
-                (at(d, x - dx, y - dy) + at(d, x, y) + at(d, x + dx, y + dy)) / 3.0
-            })
-            .collect()
-    };
-    along(&along(data, 1, 0), 0, 1)
 }
 
 /// Noise in blobs of a few pixels, at a third of the gap between the
