@@ -7,8 +7,9 @@
 //! and textured photographs break that: their noise (or texture) comes in
 //! blobs a few samples wide, which average out far less over a cell and
 //! which the run labels as phases (a 64³ four-phase volume with Gaussian
-//! noise smoothed over 1.5 voxels: mean Dice 0.48 against 0.96 with white
-//! noise of the same σ, five times the tetrahedra and 35 times the time).
+//! noise of σ 0.15 smoothed over 1.5 voxels: mean Dice 0.41 against 0.96
+//! with white noise of the same σ, five times the tetrahedra and about
+//! twenty times the time).
 //! Nothing in the result shows it, so the run says so.
 //!
 //! The figure compares the differences of samples one and [`FAR_LAG`]
@@ -24,7 +25,7 @@ use super::intensity::{IntensityStats, MAX_SAMPLES};
 
 /// Samples apart of the far differences: Gaussian noise smoothed over 1.5
 /// samples still has correlation 0.37 there (its neighbours 0.89, and the
-/// figure reads 0.83), while the edges, blurred over 1.5 samples, are few
+/// figure reads 0.84), while the edges, blurred over 1.5 samples, are few
 /// among the smallest differences.
 pub const FAR_LAG: usize = 3;
 
@@ -34,8 +35,11 @@ pub const FAR_LAG: usize = 3;
 /// (1 against 2 gives 0.75 for white noise).
 const KEPT_FRACTION: f64 = 0.75;
 
-/// A correlation figure above this gets a warning: white noise on the
-/// benchmark phantoms (2D and 3D, σ 0.05–0.2, blurred edges) reads 0–0.15.
+/// A correlation figure above this may get a warning: white noise on the
+/// phantoms (2D and 3D, σ 0.01–0.25, blurred edges) reads 0–0.27; the
+/// brain phantom's smooth inhomogeneity under noise of σ 0.01–0.02 reads
+/// up to 0.52, where the noise is far too small against the phase gaps for
+/// [`correlated_noise_warning`] to speak.
 pub const CORRELATED_NOISE_WARNING: f64 = 0.5;
 
 /// The noise correlation figure of `image` (in `[0, 1]`), whose noise
@@ -90,9 +94,9 @@ pub const CORRELATED_NOISE_OF_GAP: f64 = 0.15;
 /// The warning for a run on an image whose noise correlation figure ρ is
 /// above [`CORRELATED_NOISE_WARNING`] and whose noise over a patch is more
 /// than [`CORRELATED_NOISE_OF_GAP`] of the smallest gap between adjacent
-/// phase `means` (an empty phase has none). The noise estimate σ̂ reads neighbours' differences, which
-/// correlation shrinks by `√(1 − ρ)`, so `σ̂/√(1 − ρ)` is the noise a
-/// region of a few samples sees. Texture on a photograph reads as
+/// phase `means` (an empty phase has none). The noise estimate σ̂ reads
+/// neighbours' differences, which correlation shrinks by `√(1 − ρ)`, so
+/// `σ̂/√(1 − ρ)` is the noise a region of a few samples sees. Texture on a photograph reads as
 /// correlated too, but at a small fraction of its phases' gaps it cannot
 /// move a label.
 pub fn correlated_noise_warning(
