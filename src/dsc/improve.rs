@@ -20,6 +20,9 @@ const SEEDS_FOR_A_SCAN: usize = 8;
 const PARALLEL_REGION_FROM: usize = 512;
 /// Seeds per chunk of that search.
 const REGION_CHUNK: usize = 128;
+/// A 3D removal of degenerate cells over at least this many cells judges
+/// them on rayon's threads first.
+const JUDGE_AHEAD_FROM: usize = 4096;
 /// About how many tetrahedra share a vertex of a graded 3D mesh: the
 /// capacity a chunk's stars are collected in.
 const CELLS_PER_STAR_3D: usize = 24;
@@ -406,17 +409,27 @@ impl<K: Connectivity> Complex<K> {
             return;
         }
         marks.resize(self.cell_capacity(), false);
-        let mut take = |cells: &[CellId]| {
+        self.for_each_star(seeds, star, |cells| {
             for &c in cells {
                 if !marks[c.index()] {
                     marks[c.index()] = true;
                     out.push(c);
                 }
             }
-        };
+        });
+    }
+
+    /// Hands `take` the star of every live vertex of `seeds`, in seed order.
+    /// In 3D many seeds have their stars searched on rayon's threads first,
+    /// a chunk of seeds each: the same stars in the same order. `star` is
+    /// scratch.
+    fn for_each_star(
+        &self,
+        seeds: &[VertexId],
+        star: &mut Vec<CellId>,
+        mut take: impl FnMut(&[CellId]),
+    ) {
         if K::N == 3 && seeds.len() >= PARALLEL_REGION_FROM && rayon::current_num_threads() > 1 {
-            // The stars searched on rayon's threads, a chunk of seeds each,
-            // then taken in seed order: the region of the loop below.
             let stars: Vec<Vec<CellId>> = seeds
                 .par_chunks(REGION_CHUNK)
                 .map_init(Vec::new, |star, chunk| {
@@ -511,15 +524,14 @@ impl<K: Connectivity> Complex<K> {
     fn grow_region(&self, cells: &mut Vec<CellId>, marks: &mut Vec<bool>, walk: &mut WalkScratch) {
         marks.resize(self.cell_capacity(), false);
         self.region_vertices(cells, &mut walk.vertices, &mut walk.vertex_marks);
-        for &v in &walk.vertices {
-            self.star_into(v, &mut walk.star);
-            for &c in &walk.star {
+        self.for_each_star(&walk.vertices, &mut walk.star, |star| {
+            for &c in star {
                 if !marks[c.index()] {
                     marks[c.index()] = true;
                     cells.push(c);
                 }
             }
-        }
+        });
     }
 
     /// The vertices of `cells` (each once). `marks` is scratch.
@@ -626,13 +638,38 @@ impl<K: Connectivity> Complex<K> {
         let star = &mut walk.star;
         let made = &mut walk.splits;
         made.clear();
+        // A large region's cells are judged ahead on rayon's threads; a
+        // verdict is taken while no corner of its cell has moved since.
+        let (ahead, judged_at) = (&mut walk.ahead, self.move_clock());
+        ahead.clear();
+        if K::N == 3 && cells.len() >= JUDGE_AHEAD_FROM && rayon::current_num_threads() > 1 {
+            ahead.par_extend(
+                cells
+                    .par_iter()
+                    .map(|&c| self.is_alive(c) && self.is_degenerate_sized(c, params, sizing)),
+            );
+        }
+        // The worklist's first `unpopped` entries are still the region's
+        // cells in order (work is pushed and popped at the end only).
+        let mut unpopped = ahead.len();
         let mut budget = 4 * cells.len() + 16;
         while let Some(c) = work.pop() {
             if budget == 0 {
                 break;
             }
             budget -= 1;
-            if !self.is_alive(c) || !self.is_degenerate_sized(c, params, sizing) {
+            let verdict = (work.len() < unpopped).then(|| {
+                unpopped = work.len();
+                ahead[unpopped]
+            });
+            if !self.is_alive(c) {
+                continue;
+            }
+            let degenerate = match verdict {
+                Some(d) if self.cell(c).iter().all(|&w| self.moved_at(w) <= judged_at) => d,
+                _ => self.is_degenerate_sized(c, params, sizing),
+            };
+            if !degenerate {
                 continue;
             }
             let touched = match self.collapse_cell(c, params, straight_cos, made, star) {
@@ -758,6 +795,49 @@ mod tests {
             };
             assert_eq!(region_on(1), region_on(2), "{count} seeds");
         }
+    }
+
+    /// The removal of degenerate cells over a region large enough to be
+    /// judged ahead on rayon's threads leaves the mesh the one-thread
+    /// removal leaves, vertex for vertex and cell for cell.
+    #[test]
+    fn degenerate_removal_is_the_same_on_one_and_two_threads() {
+        use rand::{Rng, SeedableRng};
+        let mut complex = Complex::<D3>::cuboid([18.0; 3], 1.5).unwrap();
+        complex.label_by(|p| u32::from((p - nalgebra::Vector3::repeat(9.0)).norm() < 5.0));
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut star = Vec::new();
+        let ids: Vec<VertexId> = complex.vertex_ids().collect();
+        for v in ids {
+            let jitter = nalgebra::Vector3::from_fn(|_, _| rng.random_range(-0.6..0.6));
+            complex.move_towards(v, complex.position(v) + jitter, 1e-6, &mut star);
+        }
+        let mut params = DscParams::new::<D3>(1.5);
+        params.degenerate_quality = 0.35;
+        let cells: Vec<CellId> = complex.cell_ids().collect();
+        assert!(cells.len() >= JUDGE_AHEAD_FROM, "{} cells", cells.len());
+        let removed_on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut mesh = complex.clone();
+            let counts = pool.install(|| mesh.remove_degenerate_in(&cells, &params));
+            assert!(mesh.validate().is_empty());
+            let positions: Vec<_> = mesh.vertex_ids().map(|v| mesh.position(v)).collect();
+            let tets: Vec<_> = mesh
+                .cell_ids()
+                .map(|c| (mesh.cell(c).to_vec(), mesh.label(c)))
+                .collect();
+            (counts, positions, tets)
+        };
+        let one = removed_on(1);
+        assert!(
+            one.0 .0 + one.0 .1 + one.0 .2 > 20,
+            "only {:?} removals",
+            one.0
+        );
+        assert!(one == removed_on(2));
     }
 
     /// `degenerate_near` with one memo across rounds of moves answers what

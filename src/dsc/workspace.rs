@@ -108,6 +108,9 @@ pub(crate) struct WalkScratch {
     /// The vertices the current degenerate-cell removal made by splits,
     /// which it does not collapse away.
     pub(super) splits: SplitsMade,
+    /// Per cell of a large region whose degenerate cells are removed:
+    /// whether it was degenerate when the removal began.
+    pub(super) ahead: Vec<bool>,
     /// Per vertex of `vertices`: whether its star holds a degenerate cell.
     pub(super) degenerate: Vec<bool>,
     /// Cells found not degenerate by the current search for degenerate

@@ -34,6 +34,11 @@ struct Candidate<P> {
     at: P,
 }
 
+/// One NaN per cell of `cells`: qualities not computed yet.
+fn unknown_qualities(cells: &[CellId]) -> SmallVec<[f64; 64]> {
+    SmallVec::from_elem(f64::NAN, cells.len())
+}
+
 /// Layer `ops`: edge collapses.
 impl<K: Dim> Complex<K> {
     /// Collapses the edge `uv`, choosing which end survives and where (either end
@@ -59,7 +64,8 @@ impl<K: Dim> Complex<K> {
     }
 
     /// [`collapse_edge`](Self::collapse_edge) with four empty lists for the
-    /// stars of `u` and `v`, the cells of the edge, and other stars.
+    /// stars of `u` and `v`, the cells of the edge, and other stars. The
+    /// cheap refusals come first; any refusal leaves the complex unchanged.
     fn collapse_edge_with(
         &mut self,
         u: VertexId,
@@ -70,6 +76,16 @@ impl<K: Dim> Complex<K> {
         lists: &mut [Vec<CellId>; 4],
     ) -> Result<VertexId, Rejection> {
         let [star_u, star_v, edge_cells, star] = lists;
+        let (cu, cv) = (self.class(u), self.class(v));
+        // Both ends on an interface: the edge's own cells and the two ends'
+        // flatness decide whether a safe collapse has any candidate, before
+        // the stars are searched (most such collapses have none).
+        let ends_free = if mode == CollapseMode::Safe && cu.on_interface() && cv.on_interface() {
+            Some(self.interface_ends_free(u, v, straight_cos, star, edge_cells)?)
+        } else {
+            None
+        };
+        edge_cells.clear();
         self.star_into(u, star_u);
         self.star_into(v, star_v);
         edge_cells.extend(
@@ -82,25 +98,28 @@ impl<K: Dim> Complex<K> {
             return Err(Rejection::Stale);
         }
         self.check_link(u, v, star_u, star_v, edge_cells)?;
-        let (cu, cv) = (self.class(u), self.class(v));
-        let interface_edge = self.edge_on_interface(u, v, edge_cells);
-        if mode == CollapseMode::Safe && cu.on_interface() && cv.on_interface() && !interface_edge {
-            return Err(Rejection::Constrained);
-        }
         let (pu, pv) = (self.position(u), self.position(v));
-        let mut free = |w: VertexId| -> bool {
-            match self.class(w).kind {
-                VertexKind::Interior => true,
-                _ if mode == CollapseMode::Unsafe => true,
-                VertexKind::Interface => {
-                    interface_edge && self.interface_is_flat(w, straight_cos, star)
-                }
-                VertexKind::Junction => false,
+        let (free_u, free_v) = match ends_free {
+            Some(free) => free,
+            None => {
+                // At most one end on an interface, or an unsafe collapse.
+                let interface_edge = self.edge_on_interface(u, v, edge_cells);
+                let mut free = |w: VertexId| -> bool {
+                    match self.class(w).kind {
+                        VertexKind::Interior => true,
+                        _ if mode == CollapseMode::Unsafe => true,
+                        VertexKind::Interface => {
+                            interface_edge && self.interface_is_flat(w, straight_cos, star)
+                        }
+                        VertexKind::Junction => false,
+                    }
+                };
+                (free(u), free(v))
             }
         };
-        let (free_u, free_v) = (free(u), free(v));
-        // Every candidate judges the same cells before the collapse.
-        let (quality_u, quality_v) = (self.qualities(star_u), self.qualities(star_v));
+        // Every candidate judges the same cells before the collapse; their
+        // qualities are computed when a candidate first needs them.
+        let (mut quality_u, mut quality_v) = (unknown_qualities(star_u), unknown_qualities(star_v));
         // At most three positions times two choices of the kept end.
         let mut candidates: SmallVec<[(f64, Candidate<K::Point>); 6]> = SmallVec::new();
         for at in [pu, pv, (pu + pv) * 0.5] {
@@ -111,26 +130,17 @@ impl<K: Dim> Complex<K> {
             if (at != pu && !free_u) || (at != pv && !free_v) {
                 continue;
             }
-            for (keep, remove, around_keep, around_remove) in [
-                (
-                    u,
-                    v,
-                    (&star_u[..], &quality_u[..]),
-                    (&star_v[..], &quality_v[..]),
-                ),
-                (
-                    v,
-                    u,
-                    (&star_v[..], &quality_v[..]),
-                    (&star_u[..], &quality_u[..]),
-                ),
-            ] {
-                let q = self.collapse_quality(
-                    (keep, remove, at),
-                    [around_keep, around_remove],
-                    min_quality,
-                );
-                if q >= min_quality && q > 0.0 {
+            // Keeping either end at `at` makes the same cells: one judgement.
+            let q = self.collapse_quality(
+                (u, v, at),
+                [
+                    (&star_u[..], &mut quality_u[..]),
+                    (&star_v[..], &mut quality_v[..]),
+                ],
+                min_quality,
+            );
+            if q >= min_quality && q > 0.0 {
+                for (keep, remove) in [(u, v), (v, u)] {
                     candidates.push((q, Candidate { keep, remove, at }));
                 }
             }
@@ -159,26 +169,27 @@ impl<K: Dim> Complex<K> {
     /// they are keeps its quality (and its positive orientation), so only the
     /// cells that change are evaluated. Once a cell falls below `min_quality`
     /// the candidate fails whatever the others give: the worst so far, below
-    /// `min_quality`, is returned without judging the rest.
+    /// `min_quality`, is returned without judging the rest. A quality before
+    /// the collapse still unknown (NaN) is computed when first needed and
+    /// kept for the other candidates.
     fn collapse_quality(
         &self,
         (keep, remove, at): (VertexId, VertexId, K::Point),
-        stars: [(&[CellId], &[f64]); 2],
+        stars: [(&[CellId], &mut [f64]); 2],
         min_quality: f64,
     ) -> f64 {
         let stays = |w: VertexId| self.position(w) == at;
         let (keep_stays, remove_stays) = (stays(keep), stays(remove));
         let mut worst: f64 = 1.0;
         for (star, before) in stars {
-            for (&c, &before) in star.iter().zip(before) {
+            for (&c, before) in star.iter().zip(before.iter_mut()) {
                 let cell = self.cell(c);
                 let (has_keep, has_remove) = (cell.contains(&keep), cell.contains(&remove));
                 if has_keep && has_remove {
                     continue;
                 }
-                let already_degenerate = before < min_quality;
                 let q = if (!has_keep || keep_stays) && (!has_remove || remove_stays) {
-                    before
+                    self.quality_before(c, before)
                 } else {
                     let mut pts = self.cell_points(c);
                     for (i, &w) in cell.iter().enumerate() {
@@ -189,12 +200,12 @@ impl<K: Dim> Complex<K> {
                     if K::orient(&pts[..K::NV]) <= 0.0 {
                         return 0.0;
                     }
-                    if already_degenerate {
+                    if self.quality_before(c, before) < min_quality {
                         continue;
                     }
                     K::quality(&pts[..K::NV])
                 };
-                if already_degenerate {
+                if self.quality_before(c, before) < min_quality {
                     continue;
                 }
                 worst = worst.min(q);
@@ -206,12 +217,47 @@ impl<K: Dim> Complex<K> {
         worst
     }
 
-    /// The quality of each cell of `cells`, in order.
-    fn qualities(&self, cells: &[CellId]) -> SmallVec<[f64; 64]> {
-        cells
-            .iter()
-            .map(|&c| K::quality(&self.cell_points(c)[..K::NV]))
-            .collect()
+    /// The quality of `c` before the collapse: `known` if it is not NaN,
+    /// else computed and kept there.
+    #[inline]
+    fn quality_before(&self, c: CellId, known: &mut f64) -> f64 {
+        if known.is_nan() {
+            *known = K::quality(&self.cell_points(c)[..K::NV]);
+        }
+        *known
+    }
+
+    /// Whether each end of the interface-to-interface edge `uv` may move in a
+    /// safe collapse (an interface vertex where its interface is flat, and
+    /// only along an interface edge; a junction never), from the edge's
+    /// cells (into `edge_cells`; `star` is scratch). Rejects the collapse
+    /// when neither may: no candidate position is left, whatever the stars.
+    fn interface_ends_free(
+        &self,
+        u: VertexId,
+        v: VertexId,
+        straight_cos: f64,
+        star: &mut Vec<CellId>,
+        edge_cells: &mut Vec<CellId>,
+    ) -> Result<(bool, bool), Rejection> {
+        self.cells_of_edge(u, v, star, edge_cells);
+        if edge_cells.is_empty() {
+            return Err(Rejection::Stale);
+        }
+        if !self.edge_on_interface(u, v, edge_cells) {
+            return Err(Rejection::Constrained);
+        }
+        let mut free = |w: VertexId| {
+            self.class(w).kind == VertexKind::Interface
+                && self.interface_is_flat(w, straight_cos, star)
+        };
+        let ends = (free(u), free(v));
+        // (two ends at one point would leave that point a candidate: cells
+        // are positively oriented, so an edge is never that short)
+        if ends == (false, false) && self.position(u) != self.position(v) {
+            return Err(Rejection::NoCandidate);
+        }
+        Ok(ends)
     }
 
     /// Replaces the cells around `cand.remove` by the kept vertex's; `star` is scratch.
@@ -273,14 +319,15 @@ impl<K: Dim> Complex<K> {
         star_v: &[CellId],
         edge_cells: &[CellId],
     ) -> Result<(), Rejection> {
+        let around_v = self.corners_of(star_v);
+        let edge_link = self.corners_of(edge_cells);
         for &cu in star_u {
             for &w in self.cell(cu) {
                 if w == u || w == v {
                     continue;
                 }
-                let adjacent_to_v = star_v.iter().any(|&cv| self.cell(cv).contains(&w));
-                let in_edge_link = edge_cells.iter().any(|&ce| self.cell(ce).contains(&w));
-                if adjacent_to_v && !in_edge_link {
+                let adjacent_to_v = around_v.binary_search(&w).is_ok();
+                if adjacent_to_v && edge_link.binary_search(&w).is_err() {
                     return Err(Rejection::NonManifold);
                 }
             }
@@ -298,6 +345,17 @@ impl<K: Dim> Complex<K> {
             }
         }
         Ok(())
+    }
+
+    /// The corners of `cells`, sorted, each once.
+    fn corners_of(&self, cells: &[CellId]) -> SmallVec<[VertexId; 128]> {
+        let mut corners: SmallVec<[VertexId; 128]> = cells
+            .iter()
+            .flat_map(|&c| self.cell(c).iter().copied())
+            .collect();
+        corners.sort_unstable();
+        corners.dedup();
+        corners
     }
 
     /// Whether the edge `uv` lies in an interface facet.

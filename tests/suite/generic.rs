@@ -148,6 +148,84 @@ fn safe_collapse_of_non_interface_edges_conserves_phase_measures<K: TestDim>() {
     assert_valid(&c);
 }
 
+/// The positions of a complex's vertices, and its cells with their labels.
+type Snapshot<P> = (Vec<P>, Vec<(Vec<VertexId>, Label)>);
+
+/// The positions, cells and labels of `c`, to compare two complexes.
+fn snapshot<K: Dim>(c: &Complex<K>) -> Snapshot<K::Point> {
+    let positions = c.vertex_ids().map(|v| c.position(v)).collect();
+    let cells = c
+        .cell_ids()
+        .map(|t| (c.cell(t).to_vec(), c.label(t)))
+        .collect();
+    (positions, cells)
+}
+
+/// Safe collapses of edges between two interface vertices (most have no
+/// candidate, and are refused before the stars are searched): a refusal
+/// leaves the complex as it was, a collapse leaves it valid, and both occur.
+/// On the sample's round inclusion and on a flat interface (the sample
+/// cut by the plane through a middle vertex normal to the first axis).
+fn safe_collapse_between_interface_vertices_is_refused_cleanly<K: TestDim>() {
+    let round = K::sample();
+    let mut flat = round.clone();
+    let mut xs: Vec<f64> = flat.vertex_ids().map(|v| flat.position(v)[0]).collect();
+    xs.sort_by(f64::total_cmp);
+    let cut = xs[xs.len() / 2];
+    flat.label_by(|p| u32::from(p[0] < cut));
+    let (mut collapsed, mut refused) = (0, 0);
+    for c in [round, flat] {
+        let (done, kept) = collapse_between_interface_vertices(&c);
+        collapsed += done;
+        refused += kept;
+    }
+    assert!(
+        collapsed > 0 && refused > collapsed,
+        "{collapsed} collapsed, {refused} refused"
+    );
+}
+
+/// Tries the safe collapse of every edge of `c` between two interface
+/// vertices on a copy; asserts that a refusal leaves the copy as it was and
+/// a collapse leaves it valid. Returns (collapsed, refused).
+fn collapse_between_interface_vertices<K: TestDim>(c: &Complex<K>) -> (usize, usize) {
+    let p = params_for::<K>();
+    let straight_cos = p.straight_angle_deg.to_radians().cos();
+    let before = snapshot(c);
+    let mut edges = Vec::new();
+    for t in c.cell_ids() {
+        let cell = c.cell(t);
+        for a in 0..K::NV {
+            for b in a + 1..K::NV {
+                let (u, v) = (cell[a], cell[b]);
+                if c.class(u).on_interface() && c.class(v).on_interface() {
+                    edges.push((u.min(v), u.max(v)));
+                }
+            }
+        }
+    }
+    edges.sort_unstable();
+    edges.dedup();
+    let (mut collapsed, mut refused) = (0, 0);
+    for (u, v) in edges {
+        let mut after = c.clone();
+        match after.collapse_edge(u, v, CollapseMode::Safe, p.min_quality, straight_cos) {
+            Ok(_) => {
+                collapsed += 1;
+                assert_valid(&after);
+            }
+            Err(_) => {
+                refused += 1;
+                assert!(
+                    snapshot(&after) == before,
+                    "a refused collapse changed the complex"
+                );
+            }
+        }
+    }
+    (collapsed, refused)
+}
+
 macro_rules! for_both_dimensions {
     ($($name:ident),* $(,)?) => {
         mod d2 {
@@ -164,6 +242,7 @@ for_both_dimensions!(
     move_towards_never_inverts,
     split_edge_conserves_phase_measures,
     safe_collapse_of_non_interface_edges_conserves_phase_measures,
+    safe_collapse_between_interface_vertices_is_refused_cleanly,
 );
 
 /// Interface destinations `p + Σ a_k sin(ω_k·p + φ_k)`: a random smooth field.
