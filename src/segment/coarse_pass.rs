@@ -134,6 +134,11 @@ pub fn coarse_mesh<K: Raster>(
     let view = half.view().ok_or(SegmentError::EmptyImage)?;
     let mut coarse = params.clone();
     coarse.coarse_pass = false;
+    // The length weight is a width in samples, and a coarse sample is about
+    // two fine ones wide: scaled so that the pass weighs a unit of
+    // interface as the full run does.
+    let facet_ratio = (view.sample_step() / image.sample_step()).powi(K::N as i32 - 1);
+    coarse.length_weight = params.length_weight * facet_ratio;
     coarse.edge_length = Some(2.0 * l);
     coarse.sizing.finish = None;
     coarse.quiet_round_plateau = Some(0);

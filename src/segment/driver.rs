@@ -603,14 +603,19 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// costs 2ν in boundary, so it pays for itself when d > `length_weight`
     /// (a disk when its radius does): the weight is a width in pixels, and ν
     /// is in intensity² per pixel like the data term, so `a·I + b` gives the
-    /// same labels as `I`.
+    /// same labels as `I`. The data term counts samples while lengths and
+    /// areas are measured in the image's unit (a volume's millimetres), so ν
+    /// is divided by the facet measure of one sample step h
+    /// ([`ImageView::sample_step`]), h^(N−1): the width stays counted in
+    /// samples, and a volume of 4 mm voxels gives the labels it gives at 1 mm.
     fn length_weight(&self) -> f64 {
         let known: Vec<f64> = self.phases.mean.iter().flatten().copied().collect();
         let pixels: u64 = self.phases.count.iter().sum();
         let spread = (self.data_energy() / pixels.max(1) as f64).sqrt();
         let contrast = phase_contrast(&known, spread)
             .unwrap_or_else(|| self.intensity.scale() / self.params.phases as f64);
-        self.params.length_weight * contrast * contrast / 2.0
+        let step_facet = self.image.sample_step().powi(K::N as i32 - 1);
+        self.params.length_weight * contrast * contrast / 2.0 / step_facet
     }
 
     /// The complex in its current state.
