@@ -4,7 +4,7 @@ use super::refusals::RefusedCollapses;
 use super::{DscParams, SizingField};
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::{Dim, Point};
-use crate::ops::CollapseMode;
+use crate::ops::{CollapseMode, FlatEnds};
 use serde::Serialize;
 
 use super::Connectivity;
@@ -71,6 +71,8 @@ impl<K: Connectivity> Complex<K> {
     ) -> ResizeStats {
         let mut stats = ResizeStats::default();
         let straight_cos = params.straight_angle_deg.to_radians().cos();
+        // The interface vertices' flatness, asked again by many collapses.
+        let mut flat = FlatEnds::default();
         self.interface_edges_into(edges);
         for &(u, v) in edges.iter() {
             if self
@@ -93,7 +95,13 @@ impl<K: Connectivity> Complex<K> {
                 .edge_against_size(u, v, params, sizing)
                 .is_some_and(|(len, h)| len < params.min_length * h)
                 && self
-                    .collapse_edge(u, v, CollapseMode::Safe, params.min_quality, straight_cos)
+                    .collapse_edge_remembering(
+                        (u, v),
+                        CollapseMode::Safe,
+                        params.min_quality,
+                        straight_cos,
+                        &mut flat,
+                    )
                     .is_ok()
             {
                 stats.interface_collapses += 1;
@@ -110,7 +118,7 @@ impl<K: Connectivity> Complex<K> {
             judged = Some(self.resize_cells(
                 params,
                 sizing,
-                pass == 0,
+                (pass == 0).then_some(&mut flat),
                 judged.as_ref(),
                 touched,
                 &mut stats,
@@ -126,8 +134,9 @@ impl<K: Connectivity> Complex<K> {
     }
 
     /// One pass over the cells: those larger than `max_measure·A(h)` are
-    /// split at their longest edge; with `collapse_small`, those smaller
-    /// than `min_measure·A(h)` are collapsed at their shortest edge. After
+    /// split at their longest edge; with `collapse_small` (the flatness
+    /// record of the pass's collapses), those smaller than
+    /// `min_measure·A(h)` are collapsed at their shortest edge. After
     /// a pass (`before`), a later pass, which only splits, passes over the
     /// cells that one left in place unchanged (they are not large: their
     /// measure and `h` at their centroid are those it judged) but for those
@@ -136,7 +145,7 @@ impl<K: Connectivity> Complex<K> {
         &mut self,
         params: &DscParams,
         sizing: &SizingField,
-        collapse_small: bool,
+        mut collapse_small: Option<&mut FlatEnds>,
         before: Option<&JudgedPass>,
         touched: &mut Vec<VertexId>,
         stats: &mut ResizeStats,
@@ -179,11 +188,15 @@ impl<K: Connectivity> Complex<K> {
                     }
                     Err(_) => judged.failed_splits.push(c),
                 }
-            } else if collapse_small && m < min_measure {
+            } else if let Some(flat) = collapse_small.as_deref_mut().filter(|_| m < min_measure) {
                 let (u, v) = self.shortest_edge(c);
-                if let Ok(k) =
-                    self.collapse_edge(u, v, CollapseMode::Safe, params.min_quality, straight_cos)
-                {
+                if let Ok(k) = self.collapse_edge_remembering(
+                    (u, v),
+                    CollapseMode::Safe,
+                    params.min_quality,
+                    straight_cos,
+                    flat,
+                ) {
                     touched.push(k);
                     stats.cell_collapses += 1;
                 }

@@ -34,6 +34,61 @@ struct Candidate<P> {
     at: P,
 }
 
+/// Whether the interfaces around vertices are flat to a straightness
+/// `cos` ([`Complex::interface_is_flat`]), as found by the collapses of one
+/// pass over a complex. The answer depends on the vertex's star alone (its
+/// cells, their corners and labels, and the labels across its facets, which
+/// are the star's too), so a verdict given at move clock `t` stands while
+/// the star has not changed since ([`Complex::star_changed_at`]) and no
+/// label has ([`Complex::relabels`]); a record about another complex, another
+/// numbering or another straightness is forgotten.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct FlatEnds {
+    /// Per vertex id: the move clock of the verdict, and the verdict.
+    verdicts: Vec<Option<(u64, bool)>>,
+    /// The complex, numbering, labels and straightness the verdicts are about.
+    about: Option<(u64, u64, u64, u64)>,
+    straight_cos: f64,
+}
+
+impl FlatEnds {
+    /// Forgets the verdicts unless they are about `complex` as it is now
+    /// (its identity, compactions and labels) and the straightness `cos`.
+    fn sync<K: Dim>(&mut self, complex: &Complex<K>, straight_cos: f64) {
+        let about = Some((
+            complex.identity(),
+            complex.compactions(),
+            complex.relabels(),
+            straight_cos.to_bits(),
+        ));
+        if self.about != about {
+            self.verdicts.clear();
+            self.about = about;
+            self.straight_cos = straight_cos;
+        }
+    }
+
+    /// Whether the interface around `w` is flat; `star` is scratch.
+    fn is_flat<K: Dim>(
+        &mut self,
+        complex: &Complex<K>,
+        w: VertexId,
+        star: &mut Vec<CellId>,
+    ) -> bool {
+        if let Some(Some((t, flat))) = self.verdicts.get(w.index()) {
+            if complex.star_changed_at(w) <= *t {
+                return *flat;
+            }
+        }
+        let flat = complex.interface_is_flat(w, self.straight_cos, star);
+        if w.index() >= self.verdicts.len() {
+            self.verdicts.resize(w.index() + 1, None);
+        }
+        self.verdicts[w.index()] = Some((complex.move_clock(), flat));
+        flat
+    }
+}
+
 /// One NaN per cell of `cells`: qualities not computed yet.
 fn unknown_qualities(cells: &[CellId]) -> SmallVec<[f64; 64]> {
     SmallVec::from_elem(f64::NAN, cells.len())
@@ -55,8 +110,32 @@ impl<K: Dim> Complex<K> {
         if u == v || !self.is_vertex_alive(u) || !self.is_vertex_alive(v) {
             return Err(Rejection::Stale);
         }
+        self.collapse_edge_remembering(
+            (u, v),
+            mode,
+            min_quality,
+            straight_cos,
+            &mut FlatEnds::default(),
+        )
+    }
+
+    /// [`collapse_edge`](Self::collapse_edge) taking the flatness of the
+    /// ends' interfaces from `flat` where it still holds (see [`FlatEnds`]),
+    /// for a pass of many collapses.
+    pub(crate) fn collapse_edge_remembering(
+        &mut self,
+        (u, v): (VertexId, VertexId),
+        mode: CollapseMode,
+        min_quality: f64,
+        straight_cos: f64,
+        flat: &mut FlatEnds,
+    ) -> Result<VertexId, Rejection> {
+        if u == v || !self.is_vertex_alive(u) || !self.is_vertex_alive(v) {
+            return Err(Rejection::Stale);
+        }
+        flat.sync(self, straight_cos);
         let mut lists = [(); 4].map(|_| self.take_list());
-        let result = self.collapse_edge_with(u, v, mode, min_quality, straight_cos, &mut lists);
+        let result = self.collapse_edge_with(u, v, mode, min_quality, flat, &mut lists);
         for list in lists {
             self.give_back(list);
         }
@@ -72,7 +151,7 @@ impl<K: Dim> Complex<K> {
         v: VertexId,
         mode: CollapseMode,
         min_quality: f64,
-        straight_cos: f64,
+        flat: &mut FlatEnds,
         lists: &mut [Vec<CellId>; 4],
     ) -> Result<VertexId, Rejection> {
         let [star_u, star_v, edge_cells, star] = lists;
@@ -81,7 +160,7 @@ impl<K: Dim> Complex<K> {
         // flatness decide whether a safe collapse has any candidate, before
         // the stars are searched (most such collapses have none).
         let ends_free = if mode == CollapseMode::Safe && cu.on_interface() && cv.on_interface() {
-            Some(self.interface_ends_free(u, v, straight_cos, star, edge_cells)?)
+            Some(self.interface_ends_free(u, v, flat, star, edge_cells)?)
         } else {
             None
         };
@@ -108,9 +187,7 @@ impl<K: Dim> Complex<K> {
                     match self.class(w).kind {
                         VertexKind::Interior => true,
                         _ if mode == CollapseMode::Unsafe => true,
-                        VertexKind::Interface => {
-                            interface_edge && self.interface_is_flat(w, straight_cos, star)
-                        }
+                        VertexKind::Interface => interface_edge && flat.is_flat(self, w, star),
                         VertexKind::Junction => false,
                     }
                 };
@@ -236,7 +313,7 @@ impl<K: Dim> Complex<K> {
         &self,
         u: VertexId,
         v: VertexId,
-        straight_cos: f64,
+        flat: &mut FlatEnds,
         star: &mut Vec<CellId>,
         edge_cells: &mut Vec<CellId>,
     ) -> Result<(bool, bool), Rejection> {
@@ -248,8 +325,7 @@ impl<K: Dim> Complex<K> {
             return Err(Rejection::Constrained);
         }
         let mut free = |w: VertexId| {
-            self.class(w).kind == VertexKind::Interface
-                && self.interface_is_flat(w, straight_cos, star)
+            self.class(w).kind == VertexKind::Interface && flat.is_flat(self, w, star)
         };
         let ends = (free(u), free(v));
         // (two ends at one point would leave that point a candidate: cells
@@ -394,5 +470,73 @@ impl<K: Dim> Complex<K> {
         normals
             .iter()
             .all(|a| normals.iter().all(|b| a.dot(b) >= straight_cos))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dim::D3;
+    use nalgebra::Vector3;
+    use rand::{Rng, SeedableRng};
+
+    /// The flatness record answers what a fresh evaluation answers, for every
+    /// interface vertex, across collapses, moves and a relabelling.
+    #[test]
+    fn remembered_flatness_is_that_of_a_fresh_evaluation() {
+        let mut complex = Complex::<D3>::cuboid([16.0; 3], 2.0).unwrap();
+        complex.label_by(|p| u32::from(p.x < 8.0 || (p - Vector3::repeat(8.0)).norm() < 4.0));
+        let straight_cos = 20f64.to_radians().cos();
+        let mut flat = FlatEnds::default();
+        let mut star = Vec::new();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (mut flat_seen, mut bent_seen) = (0, 0);
+        for round in 0..6 {
+            flat.sync(&complex, straight_cos);
+            let interface: Vec<VertexId> = complex
+                .vertex_ids()
+                .filter(|&v| complex.class(v).kind == VertexKind::Interface)
+                .collect();
+            for &v in &interface {
+                let fresh = complex.interface_is_flat(v, straight_cos, &mut star);
+                assert_eq!(flat.is_flat(&complex, v, &mut star), fresh, "round {round}");
+                (flat_seen, bent_seen) = if fresh {
+                    (flat_seen + 1, bent_seen)
+                } else {
+                    (flat_seen, bent_seen + 1)
+                };
+            }
+            // Change some stars: collapses and moves, and once a label.
+            for &v in interface.iter().step_by(7) {
+                let jitter = Vector3::from_fn(|_, _| rng.random_range(-0.4..0.4));
+                complex.move_towards(v, complex.position(v) + jitter, 1e-6, &mut star);
+            }
+            for &v in interface.iter().skip(3).step_by(11) {
+                let Some(c) = complex
+                    .incident_cell(v)
+                    .filter(|_| complex.is_vertex_alive(v))
+                else {
+                    continue;
+                };
+                if let Some(&w) = complex.cell(c).iter().find(|&&w| w != v) {
+                    let _ = complex.collapse_edge_remembering(
+                        (v, w),
+                        CollapseMode::Safe,
+                        0.1,
+                        straight_cos,
+                        &mut flat,
+                    );
+                }
+            }
+            if round == 3 {
+                let c = complex.cell_ids().nth(100).unwrap();
+                let label = complex.label(c);
+                complex.set_label(c, 1 - label);
+            }
+        }
+        assert!(
+            flat_seen > 50 && bent_seen > 50,
+            "{flat_seen} flat, {bent_seen} bent"
+        );
     }
 }

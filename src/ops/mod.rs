@@ -16,6 +16,7 @@ mod split;
 pub(crate) use cell_qualities::{CellQualities, JudgedTet};
 pub(crate) use cell_stamps::CellStamps;
 pub use collapse::CollapseMode;
+pub(crate) use collapse::FlatEnds;
 pub use flip3d::{Flip3, MAX_RING};
 pub(crate) use memo::edge_settled;
 pub use memo::ImproveMemo;
