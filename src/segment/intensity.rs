@@ -17,7 +17,7 @@ pub const ROBUST_TAIL: f64 = 0.001;
 
 /// Largest number of samples the quantiles and the noise estimate read (an
 /// evenly strided subset of larger inputs).
-pub(super) const MAX_SAMPLES: usize = 1 << 20;
+const MAX_SAMPLES: usize = 1 << 20;
 
 /// Number of histogram bins between the robust range's ends.
 pub const HISTOGRAM_BINS: usize = 256;
