@@ -170,7 +170,7 @@ pub struct SegmentReport {
     pub converged: bool,
     /// Why it stopped.
     pub stop_reason: StopReason,
-    /// Final means per mesh label.
+    /// Final means per mesh label, `None` for a phase without pixels.
     pub final_means: Vec<Option<f64>>,
     /// Final energy.
     pub final_energy: f64,
@@ -683,6 +683,19 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// Current phase statistics.
     pub fn phases(&self) -> &PhaseStats {
         &self.phases
+    }
+
+    /// The mean of each phase that covers a pixel or voxel, `None` for an
+    /// empty one (whose [`PhaseStats::mean`] is the mean it had before it
+    /// emptied, kept so flips can revive it, but the mean of nothing).
+    fn present_means(&self) -> Vec<Option<f64>> {
+        let phases = &self.phases;
+        phases
+            .mean
+            .iter()
+            .zip(&phases.count)
+            .map(|(&m, &n)| m.filter(|_| n > 0))
+            .collect()
     }
 
     /// The records so far.
@@ -1471,13 +1484,14 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         if stop_reason == StopReason::MaxIterations {
             warnings.push(cap_warning(self.params.max_iterations));
         }
-        warnings.extend(correlated_noise_warning(&self.intensity, &self.phases.mean));
+        let final_means = self.present_means();
+        warnings.extend(correlated_noise_warning(&self.intensity, &final_means));
         SegmentReport {
             edge_length: self.dsc.edge_length,
             iterations: self.history.len(),
             converged,
             stop_reason,
-            final_means: self.phases.mean.clone(),
+            final_means,
             final_energy,
             length_weight_abs: self.nu,
             rigidity: self.models.force::<Rigidity<K>>().map(|r| r.beta),

@@ -441,10 +441,19 @@ fn rows_carry_the_warnings_of_their_runs() {
     let labels = image::open(out.join("disk").join("labels.png"))
         .unwrap()
         .into_luma8();
+    // An empty phase has no mean: `null` in every list of means, not the
+    // mean it had before it emptied.
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("disk").join("report.json")).unwrap())
+            .unwrap();
     for phase in 0..4u8 {
         let named = warnings.contains(&format!("phase {phase} covers no pixel"));
         let present = labels.pixels().any(|p| p[0] == phase);
         assert_ne!(named, present, "phase {phase}: {warnings:?}");
+        for means in [&report["final_means"], &report["input"]["phase_means"]] {
+            let mean = &means[phase as usize];
+            assert_eq!(mean.is_null(), !present, "phase {phase}: mean {mean}");
+        }
     }
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(
