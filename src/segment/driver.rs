@@ -307,6 +307,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// [applies](coarse_pass::applies) to, the mesh and labels come from a
     /// run on the image at half resolution ([`coarse_pass`]).
     pub fn new(image: ImageView<'a>, params: SegmentParams) -> Result<Self, SegmentError> {
+        // Before the coarse pass, whose error would name the halved size.
+        Self::check_size(&image)?;
         if coarse_pass::applies(&params, &image) {
             return Self::after_coarse_pass(image, params);
         }
@@ -358,12 +360,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         Self::with_models(image, params, models)
     }
 
-    fn build(
-        image: ImageView<'a>,
-        params: SegmentParams,
-        mut models: Models<K>,
-    ) -> Result<Self, SegmentError> {
-        let t0 = Instant::now();
+    /// An error unless the image has at least two samples along each of
+    /// the K axes (the smallest grid a mesh covers).
+    fn check_size(image: &ImageView<'_>) -> Result<(), SegmentError> {
         if image.is_empty() {
             return Err(SegmentError::EmptyImage);
         }
@@ -375,6 +374,16 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 K::SMALLEST_GRID,
             ));
         }
+        Ok(())
+    }
+
+    fn build(
+        image: ImageView<'a>,
+        params: SegmentParams,
+        mut models: Models<K>,
+    ) -> Result<Self, SegmentError> {
+        let t0 = Instant::now();
+        Self::check_size(&image)?;
         params.validate_in(image.dims, image.spacing)?;
         params.check_shapes_inside(image.extent())?;
         let range = image.range().ok_or(SegmentError::NonFinite)?;

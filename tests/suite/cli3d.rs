@@ -188,6 +188,12 @@ fn too_small_volumes() {
     // A single slice is an image, not a volume.
     let p = write_tiff(d.path(), "slice.tif", [12, 12, 1], &values(12)[..144]);
     fails(&SEGMENT3D, &[p.to_str().unwrap()], &out, "12×12×1 voxels");
+    // A slice large enough for the half-resolution pass is named by its own
+    // size, not the halved one.
+    let side = 130;
+    let slice: Vec<u8> = (0..side * side).map(|i| (i % 7) as u8).collect();
+    let p = write_tiff(d.path(), "large_slice.tif", [side, side, 1], &slice);
+    fails(&SEGMENT3D, &[p.to_str().unwrap()], &out, "130×130×1 voxels");
     let data = vec![0.5f32];
     let p = d.path().join("one.nii");
     save_nifti(&p, &Volume::from_raw(1, 1, 1, data)).unwrap();
