@@ -135,6 +135,7 @@ impl<K: Connectivity> Complex<K> {
             &mut touched,
             &mut ws.edges,
             &mut ws.refusals,
+            &mut ws.flat_ends,
         );
         touched.retain(|&v| self.is_vertex_alive(v));
         add(

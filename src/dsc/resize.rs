@@ -55,12 +55,16 @@ impl<K: Connectivity> Complex<K> {
             touched,
             &mut Vec::new(),
             &mut RefusedCollapses::default(),
+            &mut FlatEnds::default(),
         )
     }
 
     /// [`resize_sized`](Self::resize_sized) listing the interface edges into
     /// `edges` (scratch), skipping the coarsening collapses `refusals` knows
-    /// would be refused again (and recording the new refusals).
+    /// would be refused again (and recording the new refusals), and keeping
+    /// the interface vertices' flatness, asked again by many collapses, in
+    /// `flat` (emptied first; its buffer is kept, so that a warm iteration
+    /// does not allocate).
     pub(super) fn resize_with(
         &mut self,
         params: &DscParams,
@@ -68,11 +72,11 @@ impl<K: Connectivity> Complex<K> {
         touched: &mut Vec<VertexId>,
         edges: &mut Vec<(VertexId, VertexId)>,
         refusals: &mut RefusedCollapses,
+        flat: &mut FlatEnds,
     ) -> ResizeStats {
         let mut stats = ResizeStats::default();
         let straight_cos = params.straight_angle_deg.to_radians().cos();
-        // The interface vertices' flatness, asked again by many collapses.
-        let mut flat = FlatEnds::default();
+        flat.forget();
         self.interface_edges_into(edges);
         for &(u, v) in edges.iter() {
             if self
@@ -100,7 +104,7 @@ impl<K: Connectivity> Complex<K> {
                         CollapseMode::Safe,
                         params.min_quality,
                         straight_cos,
-                        &mut flat,
+                        flat,
                     )
                     .is_ok()
             {
@@ -118,7 +122,7 @@ impl<K: Connectivity> Complex<K> {
             judged = Some(self.resize_cells(
                 params,
                 sizing,
-                (pass == 0).then_some(&mut flat),
+                (pass == 0).then_some(&mut *flat),
                 judged.as_ref(),
                 touched,
                 &mut stats,

@@ -11,6 +11,7 @@ use super::splits_made::SplitsMade;
 use super::SizingField;
 use crate::complex::{CellId, VertexId};
 use crate::dim::Dim;
+use crate::ops::FlatEnds;
 use crate::ops::{ImproveMemo, SmoothScratch};
 
 /// What [`Complex::deform_with`](crate::complex::Complex::deform_with) (and,
@@ -46,6 +47,9 @@ pub struct DscWorkspace<K: Dim> {
     /// The coarsening collapses the mesh refused, kept across calls (they
     /// follow the compactions; see [`RefusedCollapses`]).
     pub(super) refusals: RefusedCollapses,
+    /// The resize's record of the interface vertices' flatness (emptied by
+    /// every resize; kept for its buffer).
+    pub(super) flat_ends: FlatEnds,
 }
 
 impl<K: Dim> DscWorkspace<K> {
@@ -65,6 +69,7 @@ impl<K: Dim> DscWorkspace<K> {
             smooth: SmoothScratch::default(),
             sizing: SizingField::uniform(),
             refusals: RefusedCollapses::default(),
+            flat_ends: FlatEnds::default(),
         }
     }
 }

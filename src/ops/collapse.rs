@@ -68,6 +68,12 @@ impl FlatEnds {
         }
     }
 
+    /// Forgets every verdict, keeping the buffer.
+    pub(crate) fn forget(&mut self) {
+        self.verdicts.clear();
+        self.about = None;
+    }
+
     /// Whether the interface around `w` is flat; `star` is scratch.
     fn is_flat<K: Dim>(
         &mut self,
