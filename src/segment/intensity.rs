@@ -171,22 +171,31 @@ fn rank(n: usize, q: f64) -> usize {
 /// neighbouring samples along x (for Gaussian noise on a piecewise-constant
 /// image, `|I(x+1) − I(x)|` away from edges has median `0.6745·√2·σ`).
 fn noise_sigma(image: &ImageView<'_>) -> f64 {
-    let w = image.dims[0];
-    if w < 2 {
-        return 0.0;
-    }
-    let rows = image.data.len() / w;
-    let pairs = rows * (w - 1);
-    let stride = pairs.div_ceil(MAX_SAMPLES).max(1);
-    let mut diffs: Vec<i32> = (0..pairs)
-        .step_by(stride)
-        .map(|i| {
-            let (r, x) = (i / (w - 1), i % (w - 1));
-            let p = r * w + x;
-            order_key((image.data[p + 1] - image.data[p]).abs())
-        })
+    let mut diffs: Vec<i32> = strided_abs_differences(image, 1, MAX_SAMPLES)
+        .map(order_key)
         .collect();
     quantile(&mut diffs, 0.5) / (0.6745 * std::f64::consts::SQRT_2)
+}
+
+/// `|I(x+lag) − I(x)|` along x, over every k-th pair so that at most
+/// `most` are taken (none when no pair fits in a row).
+pub(super) fn strided_abs_differences<'i>(
+    image: &'i ImageView<'_>,
+    lag: usize,
+    most: usize,
+) -> impl Iterator<Item = f32> + 'i {
+    let w = image.dims[0];
+    let per_row = w.saturating_sub(lag);
+    let pairs = if per_row == 0 {
+        0
+    } else {
+        image.data.len() / w * per_row
+    };
+    let stride = pairs.div_ceil(most).max(1);
+    (0..pairs).step_by(stride).map(move |i| {
+        let p = (i / per_row) * w + i % per_row;
+        (image.data[p + lag] - image.data[p]).abs()
+    })
 }
 
 /// Counts, sums and sums of squares of the samples per bin: within-class

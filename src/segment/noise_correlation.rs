@@ -21,7 +21,7 @@
 //! `1 − (near/far)²`, a lower bound of the neighbours' correlation.
 
 use super::image::ImageView;
-use super::intensity::IntensityStats;
+use super::intensity::{strided_abs_differences, IntensityStats};
 
 /// Samples apart of the far differences: Gaussian noise smoothed over 1.5
 /// samples still has correlation 0.37 there (its neighbours 0.89, and the
@@ -65,22 +65,14 @@ pub fn noise_correlation(image: &ImageView<'_>, noise: f64) -> Option<f64> {
 /// along x over at most [`FIGURE_SAMPLES`] evenly strided pairs; `None` if
 /// no pair fits or the mean is 0.
 fn trimmed_mean_abs_difference(image: &ImageView<'_>, lag: usize) -> Option<f64> {
-    let w = image.dims[0];
-    if w <= lag {
-        return None;
-    }
-    let per_row = w - lag;
-    let pairs = image.data.len() / w * per_row;
-    let stride = pairs.div_ceil(FIGURE_SAMPLES).max(1);
     // The bits of a non-negative float order as the float does, and
     // selecting among integers is faster than through a comparison.
-    let mut differences: Vec<u32> = (0..pairs)
-        .step_by(stride)
-        .map(|i| {
-            let p = (i / per_row) * w + i % per_row;
-            (image.data[p + lag] - image.data[p]).abs().to_bits()
-        })
+    let mut differences: Vec<u32> = strided_abs_differences(image, lag, FIGURE_SAMPLES)
+        .map(f32::to_bits)
         .collect();
+    if differences.is_empty() {
+        return None;
+    }
     let kept = ((differences.len() as f64 * KEPT_FRACTION) as usize).max(1);
     let smallest = if kept < differences.len() {
         differences.select_nth_unstable(kept).0
