@@ -16,6 +16,7 @@ the command line writes for the same samples.
 from __future__ import annotations
 
 import json
+import warnings
 from functools import cached_property
 from os import PathLike
 from typing import Any, Union
@@ -24,8 +25,18 @@ import numpy as np
 
 from . import _native
 
-__all__ = ["segment", "phantom", "Segmentation"]
+__all__ = ["segment", "phantom", "Segmentation", "SegmentationWarning"]
 __version__ = _native.__version__
+
+
+class SegmentationWarning(UserWarning):
+    """What the command line prints as ``warning: ...``: a phase lost or
+    absorbed by its neighbours, a run stopped at the iteration cap, the
+    choice of ``phases="auto"``, noise that comes in blobs. :func:`segment`
+    issues one per warning of the run, so a result with a lost phase does not
+    pass for a good one in a notebook; ``warnings.simplefilter("error",
+    dsc_seg.SegmentationWarning)`` makes them errors, and
+    :attr:`Segmentation.warnings` lists them."""
 
 
 def _option_args(options: dict[str, Any]) -> list[str]:
@@ -80,6 +91,10 @@ class Segmentation:
     report : dict
         What ``report.json`` holds: parameters, energy per iteration,
         convergence, timings, counts.
+    warnings : list of str
+        The run's warnings (the report's ``warnings``), each also issued as
+        a :class:`SegmentationWarning` by :func:`segment`; empty when all is
+        well.
     """
 
     def __init__(self, native: Any):
@@ -100,6 +115,10 @@ class Segmentation:
     @cached_property
     def cell_phases(self) -> np.ndarray:
         return self._native.cell_phases
+
+    @cached_property
+    def warnings(self) -> list[str]:
+        return list(self._native.warnings)
 
     @cached_property
     def report(self) -> dict[str, Any]:
@@ -149,24 +168,48 @@ def segment(image: Any, phases: Union[int, str] = 2, **options: Any) -> Segmenta
     The GIL is released while the segmentation runs, so threads (or a Dask
     worker's threads) can segment several images at once.
 
+    Every warning of the run (a lost phase, the iteration cap, ...; the
+    command line's ``warning:`` lines) is issued as a
+    :class:`SegmentationWarning` and kept in the result's ``warnings``.
+
     Raises ValueError for bad arguments or an unusable image, OSError when a
     file named by an option cannot be read.
     """
-    array = _checked_array(np.asarray(image))
+    array = _checked_array(image)
     args = _option_args({"phases": phases, **options})
-    return Segmentation(_native.segment(array, args))
+    result = Segmentation(_native.segment(array, args))
+    for message in result.warnings:
+        warnings.warn(message, SegmentationWarning, stacklevel=2)
+    return result
 
 
-def _checked_array(array: np.ndarray) -> np.ndarray:
-    """``array`` as the native code takes it: half-precision floats widened
-    to float32 (the native code reads 32- and 64-bit floats), and a colour
-    image refused rather than segmented as a volume.
+def _checked_array(image: Any) -> np.ndarray:
+    """``image`` as the native code takes it: a NumPy array in the machine's
+    byte order (FITS and some NIfTI data come big-endian), half-precision
+    floats widened to float32 (the native code reads 32- and 64-bit floats),
+    and a colour image or a masked array refused rather than segmented as a
+    volume or with its mask ignored.
 
     A colour image as NumPy and image libraries hold it (rows × columns ×
     3 or 4 channels) has the shape of a volume of as many slices as rows,
     3 or 4 voxels wide: segmented as one, it gives labels of the right
     shape and a plausible look, but mixes the channels along a spatial axis.
     """
+    if isinstance(image, (str, bytes, PathLike)):
+        raise ValueError(
+            f"segment() takes an array, not the file name {image!r}: read the "
+            "file first (tifffile.imread, PIL.Image.open, nibabel) or run "
+            "`dsc-seg segment FILE`"
+        )
+    if isinstance(image, np.ma.MaskedArray) and np.ma.getmask(image).any():
+        raise ValueError(
+            "the image is a masked array: segment() has no mask and would "
+            "segment the masked samples' values; fill them first "
+            "(image.filled(value)) or segment the unmasked region"
+        )
+    array = np.asarray(image)
+    if not array.dtype.isnative:
+        array = array.astype(array.dtype.newbyteorder("="))
     if array.ndim == 3 and array.shape[2] in (3, 4) and min(array.shape[:2]) > 4:
         raise ValueError(
             f"the array's shape {array.shape} is that of a colour image "

@@ -6,6 +6,9 @@ import numpy.typing as npt
 
 __version__: str
 
+class SegmentationWarning(UserWarning):
+    """A warning of the run (a lost phase, the iteration cap, ...), issued by :func:`segment`."""
+
 class Segmentation:
     """The result of :func:`segment`: labels, final mesh and report."""
 
@@ -21,6 +24,9 @@ class Segmentation:
     @property
     def cell_phases(self) -> npt.NDArray[np.uint8]:
         """Each cell's phase index."""
+    @property
+    def warnings(self) -> list[str]:
+        """The run's warnings, each also issued as a SegmentationWarning; empty when all is well."""
     @property
     def report(self) -> dict[str, Any]:
         """What report.json holds."""

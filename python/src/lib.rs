@@ -236,6 +236,13 @@ impl Segmentation {
         array(py, self.inner.cell_phases.clone(), &[n])
     }
 
+    /// The run's warnings (a lost phase, the iteration cap, the choice of
+    /// `--phases auto`, correlated noise), as the command line prints them.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.inner.summary.warnings.clone()
+    }
+
     /// The report (what `report.json` holds) as JSON text.
     #[getter]
     fn report_json(&self) -> String {

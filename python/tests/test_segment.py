@@ -6,6 +6,7 @@ import signal
 import sys
 import threading
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -161,6 +162,48 @@ def test_bad_arguments_raise_value_error_with_the_cli_message(tmp_path):
         dsc_seg.segment(image, init="labels", init_labels=tmp_path / "nope.png")
     with pytest.raises(ValueError, match="unknown"):
         dsc_seg.phantom("no_such_phantom")
+
+
+def test_the_runs_warnings_are_python_warnings_as_on_the_command_line(tmp_path, cli):
+    image, _ = dsc_seg.phantom("four_phase", size=64)
+    png = tmp_path / "four_phase.png"
+    Image.fromarray(image).save(png)
+    # Eight phases asked of a four-phase image: lost phases, as on the command line.
+    done = cli("segment", png, "--phases", 8, "--quiet", "--out", tmp_path / "cli")
+    printed = [l[len("warning: "):] for l in done.stderr.splitlines() if l.startswith("warning: ")]
+    assert printed
+    with pytest.warns(dsc_seg.SegmentationWarning) as caught:
+        result = dsc_seg.segment(image, phases=8)
+    assert [str(w.message) for w in caught] == printed
+    assert result.warnings == printed == result.report["warnings"]
+    assert caught[0].filename == __file__, "issued at the caller's line"
+    # They can be made errors; a run without them issues none.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", dsc_seg.SegmentationWarning)
+        with pytest.raises(dsc_seg.SegmentationWarning, match="iteration cap"):
+            dsc_seg.segment(image, phases=4, max_iterations=2)
+        assert dsc_seg.segment(image, phases=4).warnings == []
+
+
+def test_big_endian_arrays_give_the_native_labels():
+    # FITS images, and NIfTI data read raw, come big-endian.
+    image, _ = dsc_seg.phantom("two_phase", size=48, noise=0.2)
+    for native in (image.astype(np.float32) / 255, image.astype(np.int16) - 100,
+                   image.astype(np.uint16) * 257):
+        swapped = native.astype(native.dtype.newbyteorder(">" if sys.byteorder == "little" else "<"))
+        assert not swapped.dtype.isnative and np.array_equal(swapped, native)
+        assert np.array_equal(dsc_seg.segment(swapped).labels, dsc_seg.segment(native).labels)
+
+
+def test_a_masked_array_or_a_file_name_is_refused_not_misread():
+    image, _ = dsc_seg.phantom("two_phase", size=32)
+    with pytest.raises(ValueError, match="masked array"):
+        dsc_seg.segment(np.ma.masked_array(image, mask=image > 200))
+    # A mask that masks nothing hides nothing.
+    unmasked = dsc_seg.segment(np.ma.masked_array(image, mask=False))
+    assert np.array_equal(unmasked.labels, dsc_seg.segment(image).labels)
+    with pytest.raises(ValueError, match="read the file first"):
+        dsc_seg.segment("image.png")
 
 
 def test_a_colour_image_is_refused_not_segmented_as_a_volume():
