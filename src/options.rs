@@ -46,7 +46,7 @@ pub struct EvolutionArgs {
     pub step_gain: Option<f64>,
     /// Vertices asked to move less than this fraction of L in an iteration
     /// stay where they are (the noise's jitter about a settled interface)
-    /// [default: 0 in 2D, 0.02 in 3D].
+    /// [default: 0.01 in 2D, 0 with --adaptive in 2D, 0.02 in 3D].
     #[arg(long, allow_hyphen_values = true)]
     pub min_move: Option<f64>,
     /// Also converged once the energy has not reached a new low (by 3·10⁻⁴
@@ -111,13 +111,14 @@ impl EvolutionArgs {
         set(&mut p.elasticity, self.elasticity);
         set(&mut p.step_fraction, self.step_fraction);
         set(&mut p.step_gain, self.step_gain);
-        set(&mut p.min_move, self.min_move);
         set(&mut p.quiet_round_fraction, self.quiet_round_fraction);
         set(&mut p.length_weight, self.length_weight);
         p.flip_interval = self.flip_interval.unwrap_or(p.flip_interval);
         if self.adaptive || self.min_edge_length.is_some() || self.max_edge_length.is_some() {
             p.use_adaptive_mesh();
         }
+        // (after the adaptive mesh, which sets its own default)
+        set(&mut p.min_move, self.min_move);
         if let Some(n) = self.converge_plateau {
             p.converge_plateau = (n > 0).then_some(n);
         }
