@@ -148,9 +148,11 @@ impl<K: Dim> Complex<K> {
     pub fn measure(&self, c: CellId) -> f64 {
         K::signed_measure(&self.cell_points(c)[..K::NV])
     }
-    /// Quality in `[0, 1]` of a cell (see [`Dim::quality`]).
+    /// Quality in `[0, 1]` of a cell (see [`Dim::quality`]); every cell is
+    /// positively oriented (exactly), so the orientation test is not
+    /// repeated ([`Dim::quality_oriented`]).
     pub fn quality(&self, c: CellId) -> f64 {
-        K::quality(&self.cell_points(c)[..K::NV])
+        K::quality_oriented(&self.cell_points(c)[..K::NV])
     }
     /// Whether the facet opposite local vertex `i` of `c` separates two phases.
     pub fn is_interface_facet(&self, c: CellId, i: usize) -> bool {

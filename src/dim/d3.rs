@@ -52,6 +52,13 @@ impl Dim for D3 {
         if Self::orient(p) <= 0.0 {
             return 0.0;
         }
+        Self::quality_oriented(p)
+    }
+    /// The quality formula alone: the exact orientation test of
+    /// [`quality`](Dim::quality) costs about as much as the formula, and
+    /// most qualities asked for are of the complex's own tets.
+    #[inline]
+    fn quality_oriented(p: &[Self::Point]) -> f64 {
         let mut sum_sq = 0.0;
         for i in 0..4 {
             for j in i + 1..4 {
@@ -60,6 +67,10 @@ impl Dim for D3 {
         }
         let l_rms = (sum_sq / 6.0).sqrt();
         (6.0 * 2f64.sqrt() * Self::signed_measure(p) / (l_rms * l_rms * l_rms)).clamp(0.0, 1.0)
+    }
+    #[inline]
+    fn quality_oriented_at_least(p: &[Self::Point], q_min: f64) -> bool {
+        Self::quality_oriented(p) >= q_min
     }
     fn regular_measure(l: f64) -> f64 {
         2f64.sqrt() / 12.0 * l * l * l
@@ -84,4 +95,52 @@ fn facet_corners(
 ) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
     let mut it = (0..4).filter(|&i| i != opposite).map(|i| p[i]);
     (it.next().unwrap(), it.next().unwrap(), it.next().unwrap())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// On positively oriented tets (nearly flat ones among them, where the
+    /// floating-point volume and the exact test may disagree in sign) the
+    /// quality without the orientation test is `quality` to the bit, and
+    /// `quality_oriented_at_least` answers as `quality(p) >= t`.
+    #[test]
+    fn quality_oriented_is_quality_on_positive_tets() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut checked = 0;
+        for round in 0..40_000 {
+            let mut tet: [Vector3<f64>; 4] = std::array::from_fn(|_| {
+                Vector3::new(
+                    rng.random::<f64>(),
+                    rng.random::<f64>(),
+                    rng.random::<f64>(),
+                )
+            });
+            if round % 2 == 1 {
+                // the fourth corner close to the plane of the first three
+                let t: f64 = rng.random::<f64>() * 1e-15;
+                tet[3] = (tet[0] + tet[1] + tet[2]) / 3.0
+                    + (tet[1] - tet[0]).cross(&(tet[2] - tet[0])) * t;
+            }
+            if D3::orient(&tet) <= 0.0 {
+                tet.swap(0, 1);
+            }
+            if D3::orient(&tet) <= 0.0 {
+                continue;
+            }
+            let q = D3::quality(&tet);
+            assert_eq!(D3::quality_oriented(&tet).to_bits(), q.to_bits(), "{tet:?}");
+            for t in [0.0, 0.3, 0.8, q, q.next_up(), q.next_down()] {
+                assert_eq!(
+                    D3::quality_oriented_at_least(&tet, t),
+                    q >= t,
+                    "{tet:?} {t}"
+                );
+            }
+            checked += 1;
+        }
+        assert!(checked > 30_000, "{checked}");
+    }
 }

@@ -83,11 +83,26 @@ pub trait Dim: sealed::Sealed + Copy + Clone + Debug + Default + Send + Sync + '
     fn signed_measure(p: &[Self::Point]) -> f64;
     /// Shape quality in `[0, 1]`, 1 for the regular simplex, 0 when degenerate.
     fn quality(p: &[Self::Point]) -> f64;
+    /// [`quality`](Self::quality) of a simplex known to be positively
+    /// oriented by the exact test (every cell of a complex, a candidate
+    /// that passed [`orient`](Self::orient)): the same value, without
+    /// repeating that test. On a simplex that is not positively oriented
+    /// the answer is meaningless.
+    #[inline]
+    fn quality_oriented(p: &[Self::Point]) -> f64 {
+        Self::quality(p)
+    }
     /// Whether `quality(p) >= q_min`, exactly; dimensions may answer most
     /// cases without the square root and division of `quality`.
     #[inline]
     fn quality_at_least(p: &[Self::Point], q_min: f64) -> bool {
         Self::quality(p) >= q_min
+    }
+    /// [`quality_at_least`](Self::quality_at_least) of a simplex known to be
+    /// positively oriented (see [`quality_oriented`](Self::quality_oriented)).
+    #[inline]
+    fn quality_oriented_at_least(p: &[Self::Point], q_min: f64) -> bool {
+        Self::quality_at_least(p, q_min)
     }
     /// Measure of the regular cell with edge length `l`: the DSC's average
     /// cell area `A = √3/4·l²` (2D) or volume `V = √2/12·l³` (3D).

@@ -578,7 +578,7 @@ impl<K: Connectivity> Complex<K> {
         let pts = self.cell_points(c);
         let pts = &pts[..K::NV];
         let h = sizing.at_cell(pts, params.edge_length);
-        if !K::quality_at_least(pts, params.degenerate_quality)
+        if !K::quality_oriented_at_least(pts, params.degenerate_quality)
             || K::signed_measure(pts) < params.degenerate_measure * K::regular_measure(h)
         {
             return true;

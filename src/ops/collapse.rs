@@ -286,7 +286,7 @@ impl<K: Dim> Complex<K> {
                     if self.quality_before(c, before) < min_quality {
                         continue;
                     }
-                    K::quality(&pts[..K::NV])
+                    K::quality_oriented(&pts[..K::NV])
                 };
                 if self.quality_before(c, before) < min_quality {
                     continue;
@@ -305,7 +305,7 @@ impl<K: Dim> Complex<K> {
     #[inline]
     fn quality_before(&self, c: CellId, known: &mut f64) -> f64 {
         if known.is_nan() {
-            *known = K::quality(&self.cell_points(c)[..K::NV]);
+            *known = self.quality(c);
         }
         *known
     }

@@ -158,9 +158,12 @@ impl<K: Dim> Complex<K> {
         star: &[([K::Point; 4], Option<usize>)],
     ) -> Option<K::Point> {
         // Most stars are good: decide that without computing the qualities.
+        // (The star's cells are the complex's, positively oriented, and so
+        // are the moved ones that pass the orientation test below: their
+        // qualities need no second orientation test.)
         if star
             .iter()
-            .all(|(pts, _)| K::quality_at_least(&pts[..K::NV], GOOD_ENOUGH))
+            .all(|(pts, _)| K::quality_oriented_at_least(&pts[..K::NV], GOOD_ENOUGH))
         {
             return None;
         }
@@ -174,7 +177,7 @@ impl<K: Dim> Complex<K> {
             })
         };
         let before = at(p)
-            .map(|pts| K::quality(&pts[..K::NV]))
+            .map(|pts| K::quality_oriented(&pts[..K::NV]))
             .fold(1.0, f64::min);
         let mut sum = K::Point::zero();
         let mut n = 0usize;
@@ -194,7 +197,7 @@ impl<K: Dim> Complex<K> {
             return None;
         }
         if !at(target).all(|pts| K::orient(&pts[..K::NV]) > 0.0)
-            || !at(target).all(|pts| K::quality_at_least(&pts[..K::NV], before))
+            || !at(target).all(|pts| K::quality_oriented_at_least(&pts[..K::NV], before))
         {
             return None;
         }
