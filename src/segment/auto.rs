@@ -12,7 +12,13 @@
 //!   intermediate values, and a spare phase settles on them as a strip a
 //!   few pixels wide. Its *thickness* (area over boundary length in 2D,
 //!   volume over boundary area in 3D; half the width of a strip, a quarter
-//!   of the diameter of a disk) is below [`MIN_THICKNESS`] pixels;
+//!   of the diameter of a disk) is below [`MIN_THICKNESS`] pixels, and it
+//!   lies *between* two phases: at least [`BAND_SIDE_SHARE`] of its
+//!   boundary borders phases of lower mean and as much borders phases of
+//!   higher mean, as a strip along the edge between them does. A thin phase
+//!   that borders only darker (or only brighter) phases, such as small
+//!   bright spots, cannot be made of their blurred edges, which hold values
+//!   between them; it is judged by its plateau (below);
 //! - it has no plateau of its own: the phases' *plateau* intensities, the
 //!   means over their pixels beyond the blur of every edge
 //!   ([`phase_plateaus`]), must all differ by more than the duplicate
@@ -28,11 +34,12 @@
 
 use super::error::SegmentError;
 use super::image::ImageView;
+use super::integrate::PhaseStats;
 use super::params::SegmentParams;
 use super::partial_volume::phase_plateaus;
 use super::raster::Raster;
 use super::Segmentation;
-use crate::complex::Complex;
+use crate::complex::{Complex, Label};
 use serde::Serialize;
 
 /// Default largest number of phases tried.
@@ -41,6 +48,11 @@ pub const DEFAULT_MAX_PHASES: usize = 8;
 /// Thinnest phase (area over boundary length, pixels) a result may have;
 /// thinner phases are bands along blurred edges.
 pub const MIN_THICKNESS: f64 = 2.5;
+
+/// The least share of a band's boundary on each side of its mean: a strip
+/// along the edge between two phases borders each of them over about half
+/// of its boundary (a ring around a small disk over less on the inside).
+pub const BAND_SIDE_SHARE: f64 = 0.25;
 
 /// One tried phase count.
 #[derive(Clone, Debug, Serialize)]
@@ -56,7 +68,9 @@ pub struct PhaseTrial {
     /// Whether the run converged before the iteration cap (a run stopped
     /// at the cap is judged as it stood, and the choice warns).
     pub converged: bool,
-    /// Thickness of the thinnest phase, in pixels.
+    /// Thickness of the thinnest phase that lies between two others (see
+    /// the module documentation), in pixels; infinite (`null` in the
+    /// report) when none does.
     pub thinnest: f64,
     /// Data term `Σ (I − m)²` of the result.
     pub data_energy: f64,
@@ -155,7 +169,7 @@ pub fn choose_phases<K: Raster>(
     for n in 2..=max_phases.min(distinct.max(2)) {
         let mut seg = Segmentation::<K>::new(image, params(n))?;
         let report = seg.run(|_| {});
-        let thinnest = thinnest_phase(seg.complex(), &seg.phases().count);
+        let thinnest = thinnest_band(seg.complex(), seg.phases());
         let lost = seg.lost_phases();
         let reason = if let Some(l) = lost.first() {
             Some(l.describe(&seg.phase_order()))
@@ -199,7 +213,11 @@ fn shared_plateau(
     tolerance: f64,
 ) -> Option<String> {
     let plateaus = phase_plateaus(labels, image.data, image.dims, phases);
-    if let Some(k) = plateaus.iter().position(Option::is_none) {
+    // The darkest and the brightest phase (labels rank the phases by mean)
+    // cannot be blurred copies of others: blur mixes towards the middle.
+    let between = |k: usize| k > 0 && k + 1 < phases;
+    let no_plateau = (0..phases).find(|&k| plateaus[k].is_none() && between(k));
+    if let Some(k) = no_plateau {
         return Some(format!(
             "phase {k} has no pixel beyond the blur of its edges (a thin structure or a band)"
         ));
@@ -218,22 +236,58 @@ fn shared_plateau(
     })
 }
 
-/// The smallest ratio, over the phases, of a phase's pixel count to the
-/// measure of its boundary (the domain border excluded); infinite for a
-/// phase without boundary.
-pub fn thinnest_phase<K: Raster>(complex: &Complex<K>, count: &[u64]) -> f64 {
-    let mut boundary = vec![0.0; count.len()];
+/// A phase's boundary (the domain border excluded), split by the side of
+/// its mean the phase across it lies on.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Boundary {
+    /// Measure of the boundary with phases of lower mean.
+    below: f64,
+    /// Measure of the boundary with phases of higher (or equal) mean.
+    above: f64,
+}
+
+impl Boundary {
+    fn total(&self) -> f64 {
+        self.below + self.above
+    }
+
+    /// Whether it borders darker and brighter phases as a band between
+    /// them does: each over at least [`BAND_SIDE_SHARE`] of it.
+    fn lies_between(&self) -> bool {
+        self.below.min(self.above) >= BAND_SIDE_SHARE * self.total()
+    }
+}
+
+/// Each phase's [`Boundary`] on the final mesh, by the phases' `means`.
+fn phase_boundaries<K: Raster>(complex: &Complex<K>, means: &[Option<f64>]) -> Vec<Boundary> {
+    let mut boundary = vec![Boundary::default(); means.len()];
+    let mean = |l: Label| means.get(l as usize).copied().flatten();
     for f in complex.interface_facets() {
-        for l in [f.a, f.b] {
-            if let Some(b) = boundary.get_mut(l as usize) {
-                *b += f.measure;
+        for (own, other) in [(f.a, f.b), (f.b, f.a)] {
+            let (Some(m), Some(n), Some(b)) =
+                (mean(own), mean(other), boundary.get_mut(own as usize))
+            else {
+                continue;
+            };
+            if n < m {
+                b.below += f.measure;
+            } else {
+                b.above += f.measure;
             }
         }
     }
-    count
+    boundary
+}
+
+/// The smallest ratio of a phase's pixel count to the measure of its
+/// boundary, over the phases that lie between two others (at least
+/// [`BAND_SIDE_SHARE`] of the boundary against darker phases and as much
+/// against brighter ones); infinite when none does.
+pub fn thinnest_band<K: Raster>(complex: &Complex<K>, phases: &PhaseStats) -> f64 {
+    phase_boundaries(complex, &phases.mean)
         .iter()
-        .zip(&boundary)
-        .filter(|(&c, _)| c > 0)
-        .map(|(&c, &b)| if b > 0.0 { c as f64 / b } else { f64::INFINITY })
+        .zip(&phases.count)
+        .filter(|(b, &c)| c > 0 && b.total() > 0.0 && b.lies_between())
+        .map(|(b, &c)| c as f64 / b.total())
         .fold(f64::INFINITY, f64::min)
 }

@@ -99,6 +99,51 @@ fn the_number_of_phases_is_chosen_from_the_data() {
     }
 }
 
+/// Small bright spots (disks of radius 4 px, too small for a pixel
+/// beyond the blur of their edges) beside a large region of middle
+/// intensity on a dark background are a third phase, not a band: they
+/// border only a darker phase, and the brightest phase cannot be made by
+/// blurring the others. With the band and plateau tests applied to every
+/// phase, the spots were merged into the middle phase without a warning;
+/// alone on the background they are a second phase of their own.
+#[test]
+fn small_spots_of_the_brightest_phase_are_a_phase() {
+    use dsc_seg::dim::D2;
+    use dsc_seg::phantom::blur::gaussian_blur_2d;
+    use dsc_seg::segment::auto::choose_phases;
+    let n = 160;
+    let spots_image = |middle: bool, radius: f64, seed: u64| {
+        let mut image = vec![0.2f32; n * n];
+        for (i, v) in image.iter_mut().enumerate() {
+            let (x, y) = ((i % n) as f64, (i / n) as f64);
+            if middle && (10.0..70.0).contains(&x) && (20.0..140.0).contains(&y) {
+                *v = 0.5;
+            }
+            // Twelve spots on a 4 × 3 grid, 20 px apart.
+            let (cx, cy) = (
+                90.0 + ((x - 90.0) / 20.0).round().clamp(0.0, 3.0) * 20.0,
+                30.0 + ((y - 30.0) / 30.0).round().clamp(0.0, 2.0) * 30.0,
+            );
+            if (x - cx).hypot(y - cy) <= radius {
+                *v = 0.9;
+            }
+        }
+        let mut image = gaussian_blur_2d(&image, n, n, 1.0);
+        add_gaussian_noise(&mut image, 0.1, seed);
+        image
+    };
+    for (radius, seed) in [(4.0, 1), (4.0, 2)] {
+        for (middle, phases) in [(true, 3), (false, 2)] {
+            let image = spots_image(middle, radius, seed);
+            let view = ImageView::new_2d(n, n, &image).unwrap();
+            let choice = choose_phases::<D2>(view, 5, SegmentParams::new).unwrap();
+            assert_eq!(choice.phases, phases, "radius {radius}: {choice:?}");
+            assert!(choice.trials[phases - 2].accepted, "{choice:?}");
+            assert!(choice.warnings().is_empty(), "{choice:?}");
+        }
+    }
+}
+
 /// On a ramp every count passes as regions: the choice is the cap, and
 /// says so rather than passing for what the data holds.
 #[test]
