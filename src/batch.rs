@@ -186,8 +186,42 @@ pub fn is_batch_folder(path: &Path, three_d: bool) -> bool {
 }
 
 /// The inputs named by `paths`: files as they are, folders replaced by their
-/// inputs in name order (see [`is_batch_folder`]; hidden entries skipped).
+/// inputs in name order (see [`is_batch_folder`]; hidden entries skipped),
+/// each file once (one named twice, or both alone and through its folder,
+/// is one input: it would write one output folder).
 pub fn expand_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
+    let mut seen = std::collections::HashSet::new();
+    let inputs = listed_inputs(paths, three_d)?;
+    Ok(inputs
+        .into_iter()
+        .filter(|p| seen.insert(std::fs::canonicalize(p).unwrap_or_else(|_| p.clone())))
+        .collect())
+}
+
+/// The subfolders of the 2D batch folders among `paths` that hold images:
+/// a folder's images are taken from it alone, so these are left out unless
+/// named as inputs themselves, and the command line says so.
+pub fn image_subfolders(paths: &[PathBuf], three_d: bool) -> Vec<PathBuf> {
+    if three_d {
+        return Vec::new();
+    }
+    let holds_images = |dir: &PathBuf| {
+        sorted_entries(dir).is_ok_and(|entries| {
+            entries
+                .iter()
+                .any(|e| e.is_file() && has_extension(e, IMAGE_EXTENSIONS))
+        })
+    };
+    paths
+        .iter()
+        .filter(|p| is_batch_folder(p, false))
+        .flat_map(|p| sorted_entries(p).unwrap_or_default())
+        .filter(|e| e.is_dir() && holds_images(e) && !paths.contains(e))
+        .collect()
+}
+
+/// [`expand_inputs`] before the duplicates are dropped.
+fn listed_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
     let mut inputs = Vec::new();
     for p in paths {
         // A missing file stays in the list: its row says it cannot be read.

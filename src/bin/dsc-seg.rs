@@ -1,7 +1,9 @@
 //! The `dsc-seg` command line: argument parsing only; the library does the work.
 
 use clap::{Parser, Subcommand};
-use dsc_seg::batch::{expand_inputs, is_batch_folder, Batch, Shard, Status, Task};
+use dsc_seg::batch::{
+    expand_inputs, image_subfolders, is_batch_folder, Batch, Shard, Status, Task,
+};
 use dsc_seg::options::{one_line, Segment3dOptions, SegmentOptions};
 use dsc_seg::pipeline::{
     check_phantom_source, run_phantom, run_phantom3d, run_segment, run_segment3d, Segment3dJob,
@@ -321,6 +323,7 @@ fn run_batch(
         Some(n) => n.get(),
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
+    print_skipped_subfolders(&image_subfolders(paths, task_is_3d(&task)));
     let batch = Batch {
         inputs: expand_inputs(paths, task_is_3d(&task))?,
         task,
@@ -361,6 +364,19 @@ fn task_is_3d(task: &Task) -> bool {
 fn print_warnings(report: &dsc_seg::segment::SegmentReport) {
     for w in &report.warnings {
         eprintln!("warning: {w}");
+    }
+}
+
+/// Names the subfolders of image folders that a 2D batch leaves out, quiet
+/// or not: images that are not segmented must not go unnoticed.
+fn print_skipped_subfolders(folders: &[PathBuf]) {
+    if !folders.is_empty() {
+        let names: Vec<String> = folders.iter().map(|f| f.display().to_string()).collect();
+        eprintln!(
+            "note: the images in {} are not segmented: a folder's images are taken from it \
+             alone; name a subfolder as an input to include it",
+            names.join(", ")
+        );
     }
 }
 

@@ -475,3 +475,34 @@ fn a_folder_without_images_is_an_error() {
     assert!(stderr.contains("holds no image"), "{stderr}");
     assert!(!out.exists(), "nothing written");
 }
+
+/// A folder's subfolders of images are not segmented with it, and the
+/// command line says which they are; a file named twice (alone and through
+/// its folder) is one input, not a clash of output names.
+#[test]
+fn subfolders_left_out_are_named_and_a_file_named_twice_runs_once() {
+    let d = tmp();
+    let folder = d.path().join("images");
+    let day = folder.join("day2");
+    std::fs::create_dir_all(&day).unwrap();
+    std::fs::create_dir(folder.join("empty")).unwrap();
+    let a = write_disk(&folder, "a.png", 40, 0);
+    write_disk(&day, "b.png", 40, 1);
+    let out = d.path().join("out");
+
+    let done = run(&["--quiet"], &[&folder, &a], &out);
+    let err = String::from_utf8_lossy(&done.stderr);
+    assert!(done.status.success(), "{err}");
+    let note = err.lines().find(|l| l.starts_with("note:")).expect(&err);
+    assert!(note.contains(&day.display().to_string()), "{note}");
+    assert!(!note.contains("empty"), "{note}");
+    let rows = summary(&out.join("summary.csv"));
+    assert_eq!(rows.len(), 2, "{rows:?}");
+    assert_eq!(row(&rows, "a")[6], "done");
+
+    // Named as an input, the subfolder is segmented and not noted.
+    let done = run(&["--quiet"], &[&folder, &day], &d.path().join("out2"));
+    let err = String::from_utf8_lossy(&done.stderr);
+    assert!(done.status.success() && !err.contains("note:"), "{err}");
+    assert_eq!(summary(&d.path().join("out2").join("summary.csv")).len(), 3);
+}
