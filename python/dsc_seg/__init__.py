@@ -129,8 +129,11 @@ class Segmentation:
         missing; all or nothing): the labels (``labels.png`` / ``labels.tif``),
         the overlay (2D), the VTK mesh, interface, image and scene, the
         per-phase tables and ``report.json``. ``outputs`` chooses some, as
-        ``--outputs`` does (e.g. ``"labels,report"``). Raises OSError if the
-        directory cannot be written."""
+        ``--outputs`` does (e.g. ``"labels,report"``). The VTK files lie in
+        the report's ``frame`` (``index_to_world``), where VTK's readers place
+        the array saved as an image: pixel/voxel centres at ``(i·sx, …)``
+        (half a pixel off :attr:`vertices`) and, in 2D, rows upwards as a
+        PNG's. Raises OSError if the directory cannot be written."""
         self._native.write(str(dir), outputs)
 
     def __repr__(self) -> str:

@@ -253,6 +253,38 @@ def test_write_gives_the_cli_files(tmp_path):
         result.write(tmp_path / "file")
 
 
+def _vtu_points(path):
+    """The points of a mesh.vtu as written (one binary DataArray, base64 of a
+    UInt64 byte count and the little-endian values)."""
+    import base64
+    import re
+
+    text = path.read_text()
+    m = re.search(r'<Points><DataArray type="Float(32|64)"[^>]*format="binary"[^>]*>([^<]*)<', text)
+    raw = base64.b64decode(m.group(2).strip())[8:]
+    return np.frombuffer(raw, dtype="<f4" if m.group(1) == "32" else "<f8").reshape(-1, 3)
+
+
+def test_written_vtk_files_lie_in_the_reports_frame(tmp_path):
+    # 2D: rows upwards as a PNG's, pixel centres at (i·sx, (H − 1 − j)·sy).
+    image, _ = dsc_seg.phantom("four_phase", size=48)
+    image = image[:, :40]
+    result = dsc_seg.segment(image, phases=4, spacing=(0.5, 2.0))
+    result.write(tmp_path / "2d", outputs="mesh")
+    points = _vtu_points(tmp_path / "2d" / "mesh.vtu")
+    v = result.vertices
+    expected = np.c_[v[:, 0] - 0.25, (48 - 0.5) * 2.0 - v[:, 1], np.zeros(len(v))]
+    assert np.allclose(points, expected, atol=1e-4)
+    # 3D: voxel centres at (i·sx, j·sy, k·sz), half a voxel off the vertices.
+    volume, _ = dsc_seg.phantom("two_balls", size=12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", dsc_seg.SegmentationWarning)
+        result = dsc_seg.segment(volume, max_iterations=3, spacing=(1, 1, 2))
+    result.write(tmp_path / "3d", outputs="mesh")
+    points = _vtu_points(tmp_path / "3d" / "mesh.vtu")
+    assert np.allclose(points, result.vertices - [0.5, 0.5, 1.0], atol=1e-4)
+
+
 def test_the_gil_is_released_during_a_run():
     """With a 10 s switch interval the main thread keeps the GIL unless it
     releases it: another thread counts only while segment() runs without it."""
