@@ -1,7 +1,7 @@
 //! The paper's figures in fast mode (`FAST_SIZE` images): each asserts the
 //! topological outcome the paper's caption points out.
 
-use dsc_seg::figures::{self, pixel_components, Figure, Outcome, FAST_SIZE};
+use dsc_seg::figures::{self, panels, pixel_components, Figure, Outcome, FAST_SIZE};
 use std::time::Instant;
 
 fn run(figure: Figure) -> Vec<(figures::Case, Outcome)> {
@@ -154,4 +154,31 @@ fn full_size_fronts_merge() {
             o.topology.components
         );
     }
+}
+
+/// `paper/figures/results.md` (and with it the panels and `paper/README.md`,
+/// regenerated together by `cargo run --release --example all_figures`) is
+/// what today's engine gives at the published size: a change of the 2D
+/// defaults that moves a figure must regenerate them. The time column is left
+/// out (it depends on the machine).
+#[test]
+fn committed_results_table_is_current() {
+    let without_time = |row: &str| -> String {
+        let cells: Vec<&str> = row.split('|').collect();
+        // cells: "", Fig., run, paper's, ours, Dice, time, mesh, ""
+        assert_eq!(cells.len(), 9, "unexpected row {row}");
+        [&cells[..6], &cells[7..]].concat().join("|")
+    };
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/paper/figures/results.md");
+    let committed = std::fs::read_to_string(path).expect("paper/figures/results.md");
+    let committed: Vec<String> = committed.lines().skip(2).map(without_time).collect();
+    let today: Vec<String> = Figure::ALL
+        .iter()
+        .flat_map(|figure| figure.cases(figures::FULL_SIZE))
+        .map(|case| without_time(&panels::summary_row(&case, &figures::run(&case))))
+        .collect();
+    assert_eq!(
+        today, committed,
+        "the paper's figures are stale: cargo run --release --example all_figures, then update paper/README.md"
+    );
 }
