@@ -18,7 +18,7 @@ use crate::segment::SegmentParams;
 use crate::segmented::Outputs;
 use crate::staging;
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -190,34 +190,38 @@ pub fn is_batch_folder(path: &Path, three_d: bool) -> bool {
 /// each file once (one named twice, or both alone and through its folder,
 /// is one input: it would write one output folder).
 pub fn expand_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
-    let mut seen = std::collections::HashSet::new();
+    let mut seen = HashSet::new();
     let inputs = listed_inputs(paths, three_d)?;
     Ok(inputs
         .into_iter()
-        .filter(|p| seen.insert(std::fs::canonicalize(p).unwrap_or_else(|_| p.clone())))
+        .filter(|p| seen.insert(canonical(p)))
         .collect())
 }
 
 /// The subfolders of the 2D batch folders among `paths` that hold images:
 /// a folder's images are taken from it alone, so these are left out unless
-/// named as inputs themselves, and the command line says so.
+/// named as inputs themselves (however the path is spelt), and the command
+/// line says so. Each is listed once.
 pub fn image_subfolders(paths: &[PathBuf], three_d: bool) -> Vec<PathBuf> {
     if three_d {
         return Vec::new();
     }
-    let holds_images = |dir: &PathBuf| {
-        sorted_entries(dir).is_ok_and(|entries| {
-            entries
-                .iter()
-                .any(|e| e.is_file() && has_extension(e, IMAGE_EXTENSIONS))
-        })
-    };
+    // The folders named as inputs, then each subfolder as it is listed.
+    let mut taken: HashSet<PathBuf> = paths.iter().map(|p| canonical(p)).collect();
     paths
         .iter()
         .filter(|p| is_batch_folder(p, false))
         .flat_map(|p| sorted_entries(p).unwrap_or_default())
-        .filter(|e| e.is_dir() && holds_images(e) && !paths.contains(e))
+        .filter(|e| e.is_dir() && folder_images(e).is_ok_and(|i| !i.is_empty()))
+        .filter(|e| taken.insert(canonical(e)))
         .collect()
+}
+
+/// `path` with links and `.`/`..` resolved, so that two spellings of one
+/// file or folder compare equal; as it is when it cannot be resolved (a
+/// missing file).
+fn canonical(path: &Path) -> PathBuf {
+    std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
 /// [`expand_inputs`] before the duplicates are dropped.
@@ -230,10 +234,7 @@ fn listed_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
         } else if three_d {
             inputs.extend(volume_folder_entries(p));
         } else {
-            let images: Vec<PathBuf> = sorted_entries(p)?
-                .into_iter()
-                .filter(|e| e.is_file() && has_extension(e, IMAGE_EXTENSIONS))
-                .collect();
+            let images = folder_images(p)?;
             // An empty batch would "succeed" with an empty summary.
             if images.is_empty() {
                 return Err(Error::Usage(format!(
@@ -246,6 +247,15 @@ fn listed_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
         }
     }
     Ok(inputs)
+}
+
+/// The image files of a folder ([`IMAGE_EXTENSIONS`]) in name order,
+/// hidden ones left out.
+fn folder_images(dir: &Path) -> Result<Vec<PathBuf>> {
+    Ok(sorted_entries(dir)?
+        .into_iter()
+        .filter(|e| e.is_file() && has_extension(e, IMAGE_EXTENSIONS))
+        .collect())
 }
 
 /// A folder's entries in name order, hidden ones left out.

@@ -500,8 +500,13 @@ fn subfolders_left_out_are_named_and_a_file_named_twice_runs_once() {
     assert_eq!(rows.len(), 2, "{rows:?}");
     assert_eq!(row(&rows, "a")[6], "done");
 
-    // Named as an input, the subfolder is segmented and not noted.
-    let done = run(&["--quiet"], &[&folder, &day], &d.path().join("out2"));
+    // Named as an input, however spelt, the subfolder is segmented and not noted.
+    let roundabout = folder.join("..").join("images").join("day2");
+    let done = run(
+        &["--quiet"],
+        &[&folder, &roundabout],
+        &d.path().join("out2"),
+    );
     let err = String::from_utf8_lossy(&done.stderr);
     assert!(done.status.success() && !err.contains("note:"), "{err}");
     assert_eq!(summary(&d.path().join("out2").join("summary.csv")).len(), 3);

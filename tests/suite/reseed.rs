@@ -119,7 +119,7 @@ fn small_spots_of_the_brightest_phase_are_a_phase() {
             if middle && (10.0..70.0).contains(&x) && (20.0..140.0).contains(&y) {
                 *v = 0.5;
             }
-            // Twelve spots on a 4 × 3 grid, 20 px apart.
+            // Twelve spots on a 4 × 3 grid, 20 px apart across and 30 down.
             let (cx, cy) = (
                 90.0 + ((x - 90.0) / 20.0).round().clamp(0.0, 3.0) * 20.0,
                 30.0 + ((y - 30.0) / 30.0).round().clamp(0.0, 2.0) * 30.0,
