@@ -22,10 +22,12 @@
 //! - it has no plateau of its own: the phases' *plateau* intensities, the
 //!   means over their pixels beyond the blur of every edge
 //!   ([`phase_plateaus`]), must all differ by more than the duplicate
-//!   tolerance, and every phase must have such pixels. Blur lowers the mean
-//!   of a small or thin object of one true phase (a 5-px bar, the smallest
-//!   disk) enough at low noise for it to pass as a phase of its own; its
-//!   plateau is the true phase's, or it has none.
+//!   tolerance, and every phase but the darkest and the brightest must have
+//!   such pixels. Blur lowers the mean of a small or thin object of one true
+//!   phase (a 5-px bar, the smallest disk) enough at low noise for it to
+//!   pass as a phase of its own; its plateau is the true phase's, or it has
+//!   none. Blur mixes towards the middle, so it makes no phase darker or
+//!   brighter than all the others: those two need no plateau.
 //!
 //! Both tests are scale-free, so the choice does not depend on the
 //! intensities' units, and both follow from the piecewise-constant model:
