@@ -271,26 +271,31 @@ impl<K: Dim> Complex<K> {
                 if has_keep && has_remove {
                     continue;
                 }
-                let q = if (!has_keep || keep_stays) && (!has_remove || remove_stays) {
-                    self.quality_before(c, before)
-                } else {
+                let moved = (has_keep && !keep_stays) || (has_remove && !remove_stays);
+                // A moved cell that inverts refuses the collapse, whatever
+                // its quality before.
+                let after = moved.then(|| {
                     let mut pts = self.cell_points(c);
                     for (i, &w) in cell.iter().enumerate() {
                         if w == keep || w == remove {
                             pts[i] = at;
                         }
                     }
-                    if K::orient(&pts[..K::NV]) <= 0.0 {
-                        return 0.0;
-                    }
-                    if self.quality_before(c, before) < min_quality {
-                        continue;
-                    }
-                    K::quality_oriented(&pts[..K::NV])
-                };
+                    pts
+                });
+                if after
+                    .as_ref()
+                    .is_some_and(|pts| K::orient(&pts[..K::NV]) <= 0.0)
+                {
+                    return 0.0;
+                }
                 if self.quality_before(c, before) < min_quality {
                     continue;
                 }
+                let q = match after {
+                    Some(pts) => K::quality_oriented(&pts[..K::NV]),
+                    None => self.quality_before(c, before),
+                };
                 worst = worst.min(q);
                 if worst < min_quality {
                     return worst;
