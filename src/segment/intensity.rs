@@ -37,6 +37,13 @@ pub struct IntensityStats {
     /// neighbouring samples along x (median absolute difference / (0.6745·√2),
     /// robust to edges); 0 for noise-free data.
     pub noise: f64,
+    /// Whether [`noise`](Self::noise) leaves out the pairs with a sample at
+    /// the minimum or the maximum: the input is mostly one exact value (a
+    /// skull-stripped MRI, a CT outside its field of view, a registered
+    /// image's padding), whose pairs would make the estimate 0 whatever the
+    /// noise of the rest. When every pair gives 0, the estimate leaves
+    /// those pairs out; a noise-free image still gives 0 from the rest.
+    pub noise_excludes_extremes: bool,
     /// A lower bound of the correlation of neighbouring samples' noise
     /// (see [`noise_correlation`](super::noise_correlation)): about 0 for
     /// white noise, high for smoothed noise or texture; `None` for
@@ -54,14 +61,15 @@ impl IntensityStats {
             // Most samples share one value: fall back on the extremes.
             (low, high) = (min, max);
         }
-        let noise = noise_sigma(image);
+        let (noise, pairs) = noise_sigma(image, (min as f32, max as f32));
         IntensityStats {
             min,
             max,
             low,
             high,
             noise,
-            noise_correlation: noise_correlation(image, noise),
+            noise_excludes_extremes: pairs != SamplePairs::All,
+            noise_correlation: noise_correlation(image, noise, pairs),
         }
     }
 
@@ -167,34 +175,81 @@ fn rank(n: usize, q: f64) -> usize {
     ((n - 1) as f64 * q).round() as usize
 }
 
+/// Which pairs of neighbouring samples the noise figures read.
+///
+/// A skull-stripped MRI is three quarters background at exactly one value,
+/// so three quarters of its neighbouring pairs differ by exactly 0 and
+/// their median says "noise-free" however noisy the brain is: the
+/// duplicate-phase tolerance, the re-seeds and the noise correlation figure
+/// then work as on a noise-free image. When every pair gives 0, the pairs
+/// with a sample at an extreme (the mask's value, and the other extreme so
+/// that `−I` gives what `I` gives) are left out; a noise-free image still
+/// gives 0 from what remains (its flat interiors, or no pair at all).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum SamplePairs {
+    /// Every pair.
+    All,
+    /// The pairs with neither sample equal to either of the two values
+    /// (the input's minimum and maximum).
+    OffExtremes(f32, f32),
+}
+
+impl SamplePairs {
+    fn admits(self, a: f32, b: f32) -> bool {
+        match self {
+            SamplePairs::All => true,
+            SamplePairs::OffExtremes(low, high) => a != low && a != high && b != low && b != high,
+        }
+    }
+}
+
 /// Noise standard deviation from the median absolute difference of
 /// neighbouring samples along x (for Gaussian noise on a piecewise-constant
-/// image, `|I(x+1) − I(x)|` away from edges has median `0.6745·√2·σ`).
-fn noise_sigma(image: &ImageView<'_>) -> f64 {
-    let mut diffs: Vec<i32> = strided_abs_differences(image, 1, MAX_SAMPLES)
+/// image, `|I(x+1) − I(x)|` away from edges has median `0.6745·√2·σ`), and
+/// the pairs it read: all of them, or, if that gives 0, those off the
+/// `extremes` (see [`SamplePairs`]).
+fn noise_sigma(image: &ImageView<'_>, extremes: (f32, f32)) -> (f64, SamplePairs) {
+    let all = median_difference_sigma(image, SamplePairs::All);
+    if all > 0.0 {
+        return (all, SamplePairs::All);
+    }
+    let off_extremes = SamplePairs::OffExtremes(extremes.0, extremes.1);
+    match median_difference_sigma(image, off_extremes) {
+        s if s > 0.0 => (s, off_extremes),
+        _ => (0.0, SamplePairs::All),
+    }
+}
+
+/// The median of `|I(x+1) − I(x)|` over the admitted pairs, in units of
+/// the noise's standard deviation; 0 without pairs.
+fn median_difference_sigma(image: &ImageView<'_>, pairs: SamplePairs) -> f64 {
+    let mut diffs: Vec<i32> = strided_abs_differences(image, 1, MAX_SAMPLES, pairs)
         .map(order_key)
         .collect();
     quantile(&mut diffs, 0.5) / (0.6745 * std::f64::consts::SQRT_2)
 }
 
 /// `|I(x+lag) − I(x)|` along x, over every k-th pair so that at most
-/// `most` are taken (none when no pair fits in a row).
+/// `most` are taken (none when no pair fits in a row), of those `pairs`
+/// admits.
 pub(super) fn strided_abs_differences<'i>(
     image: &'i ImageView<'_>,
     lag: usize,
     most: usize,
+    pairs: SamplePairs,
 ) -> impl Iterator<Item = f32> + 'i {
     let w = image.dims[0];
     let per_row = w.saturating_sub(lag);
-    let pairs = if per_row == 0 {
+    let count = if per_row == 0 {
         0
     } else {
         image.data.len() / w * per_row
     };
-    let stride = pairs.div_ceil(most).max(1);
-    (0..pairs).step_by(stride).map(move |i| {
+    let stride = count.div_ceil(most).max(1);
+    (0..count).step_by(stride).filter_map(move |i| {
         let p = (i / per_row) * w + i % per_row;
-        (image.data[p + lag] - image.data[p]).abs()
+        let (a, b) = (image.data[p], image.data[p + lag]);
+        pairs.admits(a, b).then(|| (b - a).abs())
     })
 }
 
@@ -358,6 +413,51 @@ mod tests {
         assert!(close(t.high, 300.0 * s.high - 20.0));
         assert!(close(t.scale(), 300.0 * s.scale()));
         assert!(close(t.noise, 300.0 * s.noise));
+    }
+
+    /// A 200² image, three quarters exactly 0 (the mask) and a square of
+    /// two levels under Gaussian noise of standard deviation 0.05.
+    fn masked_square() -> Vec<f32> {
+        let side = 200;
+        let mut inside: Vec<f32> = (0..side * side)
+            .map(|i| if i % side < 150 { 0.4 } else { 0.7 })
+            .collect();
+        crate::phantom::noise::add_gaussian_noise(&mut inside, 0.05, 7);
+        (0..side * side)
+            .map(|i| {
+                let (x, y) = (i % side, i / side);
+                if x >= 100 && y >= 100 {
+                    inside[i]
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_masked_image_reads_the_noise_inside_its_mask() {
+        let data = masked_square();
+        let s = IntensityStats::of(&ImageView::new_2d(200, 200, &data).unwrap());
+        assert!(s.noise_excludes_extremes);
+        assert!((s.noise - 0.05).abs() < 0.005, "{}", s.noise);
+        assert!(s.noise_correlation.is_some_and(|rho| rho < 0.2), "{s:?}");
+        // Negated, the mask is the maximum: the same figure.
+        let negated: Vec<f32> = data.iter().map(|&v| -v).collect();
+        let t = IntensityStats::of(&ImageView::new_2d(200, 200, &negated).unwrap());
+        assert!(t.noise_excludes_extremes);
+        assert!((t.noise - s.noise).abs() < 1e-6, "{} {}", t.noise, s.noise);
+    }
+
+    #[test]
+    fn a_masked_noise_free_image_stays_noise_free() {
+        let data: Vec<f32> = masked_square()
+            .iter()
+            .map(|&v| if v == 0.0 { 0.0 } else { 0.5 })
+            .collect();
+        let s = IntensityStats::of(&ImageView::new_2d(200, 200, &data).unwrap());
+        assert_eq!((s.noise, s.noise_excludes_extremes), (0.0, false));
+        assert_eq!(s.noise_correlation, None);
     }
 
     #[test]

@@ -21,7 +21,7 @@
 //! `1 − (near/far)²`, a lower bound of the neighbours' correlation.
 
 use super::image::ImageView;
-use super::intensity::{strided_abs_differences, IntensityStats};
+use super::intensity::{strided_abs_differences, IntensityStats, SamplePairs};
 
 /// Samples apart of the far differences: Gaussian noise smoothed over 1.5
 /// samples still has correlation 0.37 there (its neighbours 0.89, and the
@@ -49,25 +49,34 @@ const FIGURE_SAMPLES: usize = 1 << 14;
 pub const CORRELATED_NOISE_WARNING: f64 = 0.5;
 
 /// The noise correlation figure of `image` (in `[0, 1]`), whose noise
-/// estimate is `noise`: `None` for noise-free data (`noise` 0: the
-/// differences are the structure's, which is correlated by nature) and
-/// when fewer than `FAR_LAG + 1` samples lie along x.
-pub fn noise_correlation(image: &ImageView<'_>, noise: f64) -> Option<f64> {
+/// estimate `noise` read the `pairs` it reads too: `None` for noise-free
+/// data (`noise` 0: the differences are the structure's, which is
+/// correlated by nature) and when fewer than `FAR_LAG + 1` samples lie
+/// along x.
+pub(super) fn noise_correlation(
+    image: &ImageView<'_>,
+    noise: f64,
+    pairs: SamplePairs,
+) -> Option<f64> {
     if noise <= 0.0 {
         return None;
     }
-    let near = trimmed_mean_abs_difference(image, 1)?;
-    let far = trimmed_mean_abs_difference(image, FAR_LAG)?;
+    let near = trimmed_mean_abs_difference(image, 1, pairs)?;
+    let far = trimmed_mean_abs_difference(image, FAR_LAG, pairs)?;
     Some((1.0 - (near / far).powi(2)).clamp(0.0, 1.0))
 }
 
 /// The mean of the smallest [`KEPT_FRACTION`] of `|I(x+lag) − I(x)|`
-/// along x over at most [`FIGURE_SAMPLES`] evenly strided pairs; `None` if
-/// no pair fits or the mean is 0.
-fn trimmed_mean_abs_difference(image: &ImageView<'_>, lag: usize) -> Option<f64> {
+/// along x over at most [`FIGURE_SAMPLES`] evenly strided pairs (of those
+/// `pairs` admits); `None` if no pair fits or the mean is 0.
+fn trimmed_mean_abs_difference(
+    image: &ImageView<'_>,
+    lag: usize,
+    pairs: SamplePairs,
+) -> Option<f64> {
     // The bits of a non-negative float order as the float does, and
     // selecting among integers is faster than through a comparison.
-    let mut differences: Vec<u32> = strided_abs_differences(image, lag, FIGURE_SAMPLES)
+    let mut differences: Vec<u32> = strided_abs_differences(image, lag, FIGURE_SAMPLES, pairs)
         .map(f32::to_bits)
         .collect();
     if differences.is_empty() {
@@ -151,8 +160,7 @@ mod tests {
 
     fn correlation_of(data: &[f32]) -> Option<f64> {
         let view = ImageView::new_2d(SIDE, SIDE, data).unwrap();
-        let noise = IntensityStats::of(&view).noise;
-        noise_correlation(&view, noise)
+        IntensityStats::of(&view).noise_correlation
     }
 
     #[test]
@@ -182,6 +190,7 @@ mod tests {
             low: 0.0,
             high: 1.0,
             noise,
+            noise_excludes_extremes: false,
             noise_correlation,
         }
     }
