@@ -4,18 +4,23 @@
 //! radius 2–5 px inside and cut by the border, a ring with a 2-px slit, a
 //! star) at 256² and 512², noise σ 0.1 and 0.2, with the defaults (the
 //! uniform mesh) and with `adaptive` on, and prints per structure its recall
-//! and the number of pieces it came out in, plus the cells, Dice and time.
+//! and the number of pieces it came out in, plus the cells, the iterations
+//! ("cap": stopped at the iteration cap, not converged) and the time.
 //! A second table says what the energy itself, at the adaptive run's phase
 //! means and length weight, makes of each structure after the blur: whether
 //! a line gains more per unit of length than its two sides cost, a blob more
 //! than its perimeter, and whether the slit's pixels fall below the midpoint
-//! between the means at all.
+//! between the means at all. Its last rows do the same at the phantom's
+//! own levels (0.3 / 0.7) and the ν they give (`w·0.4²/2`): what the
+//! energy makes of the structures when the phase means are the true ones.
 //!
-//! `cargo run --release --example thin_structures [-- LENGTH_WEIGHT]`
-//! (the length weight `w` of `--length-weight`; default: the default)
+//! `cargo run --release --example thin_structures [-- LENGTH_WEIGHT [SEED]]`
+//! (the length weight `w` of `--length-weight`, default: the default; the
+//! noise seed, default 1)
 
 use dsc_seg::dim::D2;
 use dsc_seg::phantom::thin::{components, score, structures, thin};
+use dsc_seg::phantom::TWO_PHASE_LEVELS;
 use dsc_seg::segment::{ImageView, SegmentParams, Segmentation};
 use std::time::Instant;
 
@@ -24,13 +29,25 @@ fn main() {
         a.parse()
             .expect("the argument is the length weight, a number")
     });
-    println!("| size | σ | mesh | cells | s | lines ≥3 px (recall, pieces) | line2 | arcs ≥3 px | arc2 | blobs r≥3 found | border r≥3 found | blob2 / border2 | slit open | star recall |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let seed: u64 = std::env::args().nth(2).map_or(1, |a| {
+        a.parse()
+            .expect("the second argument is the noise seed, a whole number")
+    });
+    println!("| size | σ | mesh | cells | iterations | s | lines ≥3 px (recall, pieces) | line2 | arcs ≥3 px | arc2 | blobs r≥3 found | border r≥3 found | blob2 / border2 | slit open | star recall |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut balance = Vec::new();
+    let mut at_levels = Vec::new();
     for size in [256, 512] {
         let clean = thin(size, 0.0, 1).image;
+        let [low, high] = TWO_PHASE_LEVELS;
+        let w = length_weight.unwrap_or(SegmentParams::new(2).length_weight);
+        let nu = w * (high - low).powi(2) / 2.0;
+        at_levels.push(format!(
+            "| {size} | levels | {low:.3} / {high:.3} | {nu:.3} | {} |",
+            energy_balance(&clean, size, (low, high), nu)
+        ));
         for sigma in [0.1, 0.2] {
-            let ph = thin(size, sigma, 1);
+            let ph = thin(size, sigma, seed);
             for adaptive in [false, true] {
                 let view = ImageView::new_2d(size, size, &ph.image).expect("image");
                 let mut params = SegmentParams::new(2);
@@ -42,7 +59,7 @@ fn main() {
                 }
                 let t = Instant::now();
                 let mut seg = Segmentation::<D2>::new(view, params).expect("segmentation");
-                seg.run(|_| {});
+                let report = seg.run(|_| {});
                 let secs = t.elapsed().as_secs_f64();
                 if adaptive {
                     let means = &seg.phases().mean;
@@ -70,9 +87,11 @@ fn main() {
                 };
                 let background: Vec<bool> = labels.iter().map(|&l| l == 0).collect();
                 println!(
-                    "| {size} | {sigma} | {} | {} | {secs:.3} | {} {} | {} | {} {} | {} | {}/3 | {}/3 | {}/{} | {} | {:.2} |",
+                    "| {size} | {sigma} | {} | {} | {}{} | {secs:.3} | {} {} | {} | {} {} | {} | {}/3 | {}/3 | {}/{} | {} | {:.2} |",
                     if adaptive { "adaptive" } else { "uniform" },
                     seg.complex().cell_count(),
+                    report.iterations,
+                    if report.converged { "" } else { " (cap)" },
                     pair("line3"),
                     pair("line4"),
                     pair("line2"),
@@ -92,7 +111,7 @@ fn main() {
     println!();
     println!("| size | σ | means | ν | line2 gain | line3 gain | line4 gain | 2ν | blob3 net | blob4 net | blob5 net | slit brightest column / midpoint |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
-    for row in balance {
+    for row in balance.into_iter().chain(at_levels) {
         println!("{row}");
     }
 }
