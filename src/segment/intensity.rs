@@ -10,6 +10,7 @@
 use super::image::ImageView;
 use super::integrate::CellStats;
 use super::noise_correlation::noise_correlation;
+use super::rank_select::{from_order_key, keys_of_ranks};
 use serde::Serialize;
 
 /// Fraction of the samples left out at each end of the robust range.
@@ -55,8 +56,7 @@ impl IntensityStats {
     /// The figures of `image` (finite samples, at least one).
     pub fn of(image: &ImageView<'_>) -> Self {
         let (min, max) = image.range().unwrap_or((0.0, 0.0));
-        let mut sample = strided_keys(image.data);
-        let [mut low, mut high] = quantile_pair(&mut sample, [ROBUST_TAIL, 1.0 - ROBUST_TAIL]);
+        let [mut low, mut high] = strided_quantiles(image.data, [ROBUST_TAIL, 1.0 - ROBUST_TAIL]);
         if high <= low {
             // Most samples share one value: fall back on the extremes.
             (low, high) = (min, max);
@@ -116,58 +116,26 @@ fn bin_index(x: f64, bins: usize) -> usize {
     (x as usize).min(bins - 1)
 }
 
-/// The order keys of samples of `data`, every k-th so that at most
-/// [`MAX_SAMPLES`] are taken (see [`order_key`]).
-fn strided_keys(data: &[f32]) -> Vec<i32> {
+/// The quantiles `q` of every k-th sample of `data`, so that at most
+/// [`MAX_SAMPLES`] are read (see [`quantiles`]).
+fn strided_quantiles<const R: usize>(data: &[f32], q: [f64; R]) -> [f64; R] {
     let stride = data.len().div_ceil(MAX_SAMPLES).max(1);
-    data.iter().step_by(stride).map(|&v| order_key(v)).collect()
-}
-
-/// An integer that orders as [`f32::total_cmp`] orders `v` (its own
-/// transformation of the bits): selecting among integers is faster than
-/// among floats through a comparison function. [`from_order_key`] undoes it.
-fn order_key(v: f32) -> i32 {
-    let bits = v.to_bits() as i32;
-    bits ^ (((bits >> 31) as u32) >> 1) as i32
-}
-
-/// The sample whose [`order_key`] is `key`.
-fn from_order_key(key: i32) -> f32 {
-    // The transformation keeps the sign bit, so it is its own inverse.
-    f32::from_bits(order_key(f32::from_bits(key as u32)) as u32)
-}
-
-/// The `q` quantile of the samples whose order keys are `keys` (reordered
-/// in place; `keys` non-empty): the sample of rank `round((n − 1)·q)`.
-fn quantile(keys: &mut [i32], q: f64) -> f64 {
-    if keys.is_empty() {
-        return 0.0;
-    }
-    let k = rank(keys.len(), q);
-    let (_, x, _) = keys.select_nth_unstable(k);
-    from_order_key(*x) as f64
-}
-
-/// The quantiles `q[0] ≤ q[1]` (asserted) of the samples whose order keys
-/// are `keys` (reordered in place), as [`quantile`] gives each: the second
-/// is selected among the keys the first left above it.
-fn quantile_pair(keys: &mut [i32], q: [f64; 2]) -> [f64; 2] {
-    if keys.is_empty() {
-        return [0.0; 2];
-    }
-    let (k0, k1) = (rank(keys.len(), q[0]), rank(keys.len(), q[1]));
-    assert!(
-        k0 <= k1,
-        "quantile_pair takes its quantiles in increasing order"
-    );
-    let (_, x0, above) = keys.select_nth_unstable(k0);
-    let x0 = *x0;
-    let x1 = if k1 == k0 {
-        x0
+    if stride == 1 {
+        quantiles(|| data.iter().copied(), q)
     } else {
-        *above.select_nth_unstable(k1 - k0 - 1).1
-    };
-    [from_order_key(x0) as f64, from_order_key(x1) as f64]
+        quantiles(|| data.iter().step_by(stride).copied(), q)
+    }
+}
+
+/// The quantiles `q` of the samples `samples()` yields (see
+/// [`keys_of_ranks`]), each the sample of rank `round((n − 1)·q)` among
+/// the `n` samples in [`f32::total_cmp`]'s order; 0 for no samples.
+fn quantiles<const R: usize, I: Iterator<Item = f32>>(
+    samples: impl Fn() -> I,
+    q: [f64; R],
+) -> [f64; R] {
+    keys_of_ranks(samples, |n| q.map(|q| rank(n, q)))
+        .map_or([0.0; R], |keys| keys.map(|k| from_order_key(k) as f64))
 }
 
 /// The rank of the `q` quantile among `n` samples.
@@ -223,10 +191,44 @@ fn noise_sigma(image: &ImageView<'_>, extremes: (f32, f32)) -> (f64, SamplePairs
 /// The median of `|I(x+1) − I(x)|` over the admitted pairs, in units of
 /// the noise's standard deviation; 0 without pairs.
 fn median_difference_sigma(image: &ImageView<'_>, pairs: SamplePairs) -> f64 {
-    let mut diffs: Vec<i32> = strided_abs_differences(image, 1, MAX_SAMPLES, pairs)
-        .map(order_key)
-        .collect();
-    quantile(&mut diffs, 0.5) / (0.6745 * std::f64::consts::SQRT_2)
+    let [median] = if pair_count(image, 1) <= MAX_SAMPLES {
+        quantiles(|| abs_differences(image, 1, pairs), [0.5])
+    } else {
+        quantiles(
+            || strided_abs_differences(image, 1, MAX_SAMPLES, pairs),
+            [0.5],
+        )
+    };
+    median / (0.6745 * std::f64::consts::SQRT_2)
+}
+
+/// The number of pairs of samples `lag` apart along x.
+fn pair_count(image: &ImageView<'_>, lag: usize) -> usize {
+    let w = image.dims[0];
+    match w.saturating_sub(lag) {
+        0 => 0,
+        per_row => image.data.len() / w * per_row,
+    }
+}
+
+/// `|I(x+lag) − I(x)|` along x over the admitted pairs, row by row: the
+/// differences of [`strided_abs_differences`] when it takes every pair,
+/// without its division per pair.
+fn abs_differences<'i>(
+    image: &'i ImageView<'_>,
+    lag: usize,
+    pairs: SamplePairs,
+) -> impl Iterator<Item = f32> + 'i {
+    image
+        .data
+        .chunks_exact(image.dims[0].max(1))
+        .flat_map(move |row| {
+            let far = row.get(lag..).unwrap_or(&[]);
+            row.iter()
+                .zip(far)
+                .filter(move |&(&a, &b)| pairs.admits(a, b))
+                .map(|(&a, &b)| (b - a).abs())
+        })
 }
 
 /// `|I(x+lag) − I(x)|` along x, over every k-th pair so that at most
@@ -240,11 +242,7 @@ pub(super) fn strided_abs_differences<'i>(
 ) -> impl Iterator<Item = f32> + 'i {
     let w = image.dims[0];
     let per_row = w.saturating_sub(lag);
-    let count = if per_row == 0 {
-        0
-    } else {
-        image.data.len() / w * per_row
-    };
+    let count = pair_count(image, lag);
     let stride = count.div_ceil(most).max(1);
     (0..count).step_by(stride).filter_map(move |i| {
         let p = (i / per_row) * w + i % per_row;
@@ -351,8 +349,8 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
-        /// The quantiles selected by order key are the samples of that rank
-        /// in `f32::total_cmp`'s order, bit for bit (negative zeros and
+        /// The quantiles are the samples of their rank in
+        /// `f32::total_cmp`'s order, bit for bit (negative zeros and
         /// infinities included).
         #[test]
         fn quantiles_by_key_are_the_ranked_samples(
@@ -373,12 +371,11 @@ mod tests {
             let mut sorted = data.clone();
             sorted.sort_by(f32::total_cmp);
             let expect = |q: f64| f64::from(sorted[rank(sorted.len(), q)]);
-            let mut keys: Vec<i32> = data.iter().map(|&v| order_key(v)).collect();
-            let [a, b] = quantile_pair(&mut keys, [q0, q1]);
+            let [a, b] = strided_quantiles(&data, [q0, q1]);
             prop_assert_eq!(a.to_bits(), expect(q0).to_bits());
             prop_assert_eq!(b.to_bits(), expect(q1).to_bits());
-            let mut keys: Vec<i32> = data.iter().map(|&v| order_key(v)).collect();
-            prop_assert_eq!(quantile(&mut keys, q1).to_bits(), expect(q1).to_bits());
+            let [c] = quantiles(|| data.iter().copied(), [q1]);
+            prop_assert_eq!(c.to_bits(), expect(q1).to_bits());
         }
 
         /// The bin of a sample is `floor` of its offset in bin widths,
@@ -388,6 +385,24 @@ mod tests {
             let bins = HISTOGRAM_BINS;
             let expect = (x.floor().max(0.0) as usize).min(bins - 1);
             prop_assert_eq!(bin_index(x, bins), expect);
+        }
+    }
+
+    /// The row-by-row differences are the strided ones when those take
+    /// every pair, in the same order, of all pairs or those off two values.
+    #[test]
+    fn abs_differences_are_every_strided_pair() {
+        let data: Vec<f32> = (0..7 * 5).map(|i| ((i * 37) % 11) as f32 * 0.1).collect();
+        let image = ImageView::new_2d(7, 5, &data).unwrap();
+        for lag in [1, 3, 6, 7] {
+            for pairs in [SamplePairs::All, SamplePairs::OffExtremes(0.0, 0.5)] {
+                let rows: Vec<f32> = abs_differences(&image, lag, pairs).collect();
+                let strided: Vec<f32> =
+                    strided_abs_differences(&image, lag, usize::MAX, pairs).collect();
+                assert_eq!(rows, strided, "lag {lag}, {pairs:?}");
+            }
+            let all = abs_differences(&image, lag, SamplePairs::All).count();
+            assert_eq!(all, pair_count(&image, lag), "lag {lag}");
         }
     }
 

@@ -74,6 +74,7 @@ mod normal_motion;
 pub mod params;
 pub mod partial_volume;
 pub mod phase_distance;
+mod rank_select;
 pub mod raster;
 pub mod relaxed_length;
 pub mod reseed;
