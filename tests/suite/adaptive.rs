@@ -429,3 +429,24 @@ fn the_coarse_pass_mesh_covers_an_odd_volume_and_starts_near_the_answer() {
         "Dice {dice} after the coarse pass, {plain_dice} without"
     );
 }
+
+/// Thin structures under noise (512², σ 0.2): cells at the smallest size
+/// along the lines flip back and forth every iteration, a few of thousands;
+/// such an iteration counts as calm on the adaptive mesh, so the energy
+/// plateau ends the run (before, it ran to the iteration cap).
+#[test]
+fn adaptive_2d_run_on_noisy_thin_structures_converges() {
+    use dsc_seg::phantom::thin::thin;
+    let size = 512;
+    let ph = thin(size, 0.2, 1);
+    let view = ImageView::new_2d(size, size, &ph.image).unwrap();
+    let mut seg = Segmentation::<D2>::new(view, adaptive(SegmentParams::new(2), false)).unwrap();
+    let report = seg.run(|_| {});
+    assert_valid(seg.complex());
+    assert!(
+        report.converged && report.iterations < 100,
+        "{} iterations, converged {}",
+        report.iterations,
+        report.converged
+    );
+}
