@@ -7,6 +7,7 @@
 pub mod atomic;
 pub mod error;
 pub mod frame;
+pub mod hyperstack;
 pub mod image2;
 pub mod intensity;
 pub mod render;

@@ -38,6 +38,7 @@ use std::path::{Path, PathBuf};
 use super::atomic::{write_atomic, write_bytes_atomic};
 use super::error::{io_reason, IoError, Result};
 use super::frame::{Affine, Frame, FrameSource};
+use super::hyperstack::Hyperstack;
 use super::image2::{lerp_nodes, Image2, SampleType};
 use super::intensity::IntensityMap;
 use super::resolution::{tiff_resolution, Resolution};
@@ -229,6 +230,12 @@ impl Volume {
         };
         let mut dec = Decoder::new(BufReader::new(file)).map_err(bad)?;
         let resolution = tiff_resolution(&mut dec);
+        if let Some(stack) = Hyperstack::of_tiff(&mut dec) {
+            return Err(IoError::Unsupported {
+                path: path.to_path_buf(),
+                reason: stack.refusal(),
+            });
+        }
         let mut raw = Samples::U8(Vec::new());
         let mut sample_type = SampleType::Uint8;
         let (mut nx, mut ny, mut nz) = (0usize, 0usize, 0usize);
@@ -299,9 +306,9 @@ impl Volume {
             }
             dec.next_image().map_err(bad)?;
         }
-        let (data, intensity) = raw.normalise().map_err(|e| IoError::MalformedTiff {
+        let (data, intensity) = raw.normalise().map_err(|samples| IoError::NonFinite {
             path: path.to_path_buf(),
-            reason: e.to_string(),
+            samples,
         })?;
         Ok(Volume {
             nx,
@@ -809,7 +816,10 @@ fn parse_nifti(path: &Path, b: &[u8]) -> Result<Volume> {
                     }
                 })
                 .collect();
-            min_max_normalise(&values).map_err(|e| bad(e.to_string()))?
+            min_max_normalise(&values).map_err(|samples| IoError::NonFinite {
+                path: path.to_path_buf(),
+                samples,
+            })?
         }
     };
     // Axes beyond `dim[0]` do not exist in the file: unit spacing.
@@ -1535,6 +1545,64 @@ mod tests {
             assert_eq!(offset, first + z * nx * ny);
         }
         assert!(!decoder.more_images());
+    }
+
+    /// A NaN in a well-formed file is the data's problem, not the file's:
+    /// the error says what is wrong with the samples, not "malformed".
+    #[test]
+    fn non_finite_samples_are_not_called_a_malformed_file() {
+        use tiff::encoder::{colortype, TiffEncoder};
+        let dir = tempfile::tempdir().unwrap();
+        let mut data = vec![1.0f32; 8];
+        data[3] = f32::NAN;
+        let nii = dir.path().join("nan.nii.gz");
+        save_nifti(&nii, &Volume::from_raw(2, 2, 2, data.clone())).unwrap();
+        let tif = dir.path().join("nan.tif");
+        let mut enc = TiffEncoder::new(File::create(&tif).unwrap()).unwrap();
+        for page in data.chunks(4) {
+            enc.write_image::<colortype::Gray32Float>(2, 2, page)
+                .unwrap();
+        }
+        drop(enc);
+        for p in [nii, tif] {
+            let e = Volume::load(&p).unwrap_err();
+            assert!(matches!(e, IoError::NonFinite { .. }), "{e}");
+            assert!(!e.to_string().contains("malformed"), "{e}");
+            assert!(
+                e.to_string().contains("1 of 8 samples are not finite"),
+                "{e}"
+            );
+        }
+    }
+
+    /// Fiji's hyperstack of 2 channels × 2 slices × 2 frames is 8 pages:
+    /// read as one stack it would be a "volume" of interleaved channels.
+    #[test]
+    fn tiff_hyperstack_is_refused_naming_its_extents() {
+        use tiff::encoder::{colortype, TiffEncoder};
+        use tiff::tags::Tag;
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("hyper.tif");
+        let mut enc = TiffEncoder::new(File::create(&p).unwrap()).unwrap();
+        let desc = "ImageJ=1.11a\nimages=8\nchannels=2\nslices=2\nframes=2\nhyperstack=true\n";
+        for page in 0..8u8 {
+            let mut image = enc.new_image::<colortype::Gray8>(2, 2).unwrap();
+            if page == 0 {
+                image
+                    .encoder()
+                    .write_tag(Tag::ImageDescription, desc)
+                    .unwrap();
+            }
+            image.write_data(&[page; 4]).unwrap();
+        }
+        drop(enc);
+        let e = Volume::load(&p).unwrap_err();
+        assert!(matches!(e, IoError::Unsupported { .. }), "{e}");
+        assert!(
+            e.to_string()
+                .contains("2 channels × 2 slices × 2 time points"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -194,8 +194,16 @@ pub fn load_image_channel(
     }
 }
 
-/// A multi-page TIFF is a volume: `segment` would read its first page only.
+/// A multi-page TIFF is a volume (or a hyperstack, refused by both readers):
+/// `segment` would read its first page only. A NIfTI file is a volume too,
+/// which the image decoders would only call an unknown extension.
 fn refuse_stacks(path: &Path) -> Result<()> {
+    if crate::io::volume::is_nifti(path) {
+        return Err(Error::Usage(format!(
+            "{} is a NIfTI volume: `segment` reads 2D images, segment it with `dsc-seg segment3d`",
+            path.display()
+        )));
+    }
     if !crate::io::resolution::is_tiff(path) {
         return Ok(());
     }
@@ -205,6 +213,13 @@ fn refuse_stacks(path: &Path) -> Result<()> {
     let Ok(mut dec) = tiff::decoder::Decoder::new(std::io::BufReader::new(file)) else {
         return Ok(());
     };
+    if let Some(stack) = crate::io::hyperstack::Hyperstack::of_tiff(&mut dec) {
+        return Err(Error::Usage(format!(
+            "{} is {}",
+            path.display(),
+            stack.refusal()
+        )));
+    }
     let mut pages = 1usize;
     while dec.more_images() && dec.next_image().is_ok() {
         pages += 1;

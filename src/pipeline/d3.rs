@@ -130,10 +130,29 @@ fn load_label_volume(path: &Path, dims: [usize; 3], phases: usize) -> Result<Vec
     Ok(labels)
 }
 
+/// A one-page TIFF is a 2D image: `segment3d` could only call it a volume
+/// one voxel thick, too thin to mesh, so it says which command takes it.
+fn refuse_single_page(path: &Path, volume: &Volume) -> Result<()> {
+    if volume.nz() == 1 && crate::io::resolution::is_tiff(path) {
+        return Err(Error::Usage(format!(
+            "{} is {}×{}×1 voxels, one page: a single-page TIFF is a 2D image, \
+             segment it with `dsc-seg segment`",
+            path.display(),
+            volume.nx(),
+            volume.ny()
+        )));
+    }
+    Ok(())
+}
+
 /// Loads (or generates) a 3D input, with the phantom's ground truth.
 pub fn load_volume(source: &Source) -> Result<(Volume, Option<GroundTruth>)> {
     match source {
-        Source::File(path) => Ok((Volume::load(path)?, None)),
+        Source::File(path) => {
+            let volume = Volume::load(path)?;
+            refuse_single_page(path, &volume)?;
+            Ok((volume, None))
+        }
         Source::Phantom {
             name,
             size,

@@ -704,6 +704,47 @@ fn a_tiff_stack_given_to_segment_points_to_segment3d() {
 }
 
 #[test]
+fn a_nifti_given_to_segment_points_to_segment3d() {
+    let d = tmp();
+    let p = d.path().join("volume.nii.gz");
+    let data: Vec<f32> = (0..4 * 4 * 3).map(|i| (i % 5) as f32).collect();
+    dsc_seg::io::save_nifti(&p, &dsc_seg::io::Volume::from_raw(4, 4, 3, data)).unwrap();
+    fails(
+        &SEGMENT,
+        &[p.to_str().unwrap()],
+        &empty_out(&d),
+        "is a NIfTI volume: `segment` reads 2D images, segment it with `dsc-seg segment3d`",
+    );
+}
+
+/// A two-channel, two-slice ImageJ hyperstack is four pages, but not a
+/// volume: both commands refuse it, naming its extents, rather than pointing
+/// `segment`'s user to `segment3d` (which would take the channels for slices).
+#[test]
+fn an_imagej_hyperstack_is_refused_by_both_commands() {
+    use tiff::encoder::{colortype, TiffEncoder};
+    let d = tmp();
+    let p = d.path().join("two_channels.tif");
+    let mut enc = TiffEncoder::new(std::fs::File::create(&p).unwrap()).unwrap();
+    let desc = "ImageJ=1.11a\nimages=4\nchannels=2\nslices=2\nhyperstack=true\n";
+    for page in 0..4u8 {
+        let mut image = enc.new_image::<colortype::Gray8>(16, 16).unwrap();
+        if page == 0 {
+            let tag = tiff::tags::Tag::ImageDescription;
+            image.encoder().write_tag(tag, desc).unwrap();
+        }
+        let data: Vec<u8> = (0..256u32).map(|i| (i % 5 * 40) as u8 + page).collect();
+        image.write_data(&data).unwrap();
+    }
+    drop(enc);
+    let input = [p.to_str().unwrap()];
+    let extents = "2 channels × 2 slices × 1 time point";
+    let out = empty_out(&d);
+    fails(&SEGMENT, &input, &out, extents);
+    fails(&SEGMENT3D, &input, &out, extents);
+}
+
+#[test]
 fn a_colour_image_is_said_to_be_segmented_as_its_luminance() {
     let d = tmp();
     let p = d.path().join("rgb.png");

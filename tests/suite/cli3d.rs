@@ -179,15 +179,20 @@ fn too_small_volumes() {
     let d = tmp();
     let out = empty_out(&d);
     let p = write_tiff(d.path(), "one.tif", [1, 1, 1], &[9]);
+    fails(&SEGMENT3D, &[p.to_str().unwrap()], &out, "1×1×1 voxels");
+    // A single slice is an image, not a volume: the error names the file
+    // and the command that takes it.
+    let p = write_tiff(d.path(), "slice.tif", [12, 12, 1], &values(12)[..144]);
+    let line = fails(&SEGMENT3D, &[p.to_str().unwrap()], &out, "12×12×1 voxels");
+    assert!(line.contains("slice.tif"), "{line}");
+    assert!(line.contains("segment it with `dsc-seg segment`"), "{line}");
+    let nz2 = write_tiff(d.path(), "two.tif", [1, 1, 2], &[9, 9]);
     fails(
         &SEGMENT3D,
-        &[p.to_str().unwrap()],
+        &[nz2.to_str().unwrap()],
         &out,
-        "1×1×1 voxels; at least 2×2×2",
+        "1×1×2 voxels; at least 2×2×2",
     );
-    // A single slice is an image, not a volume.
-    let p = write_tiff(d.path(), "slice.tif", [12, 12, 1], &values(12)[..144]);
-    fails(&SEGMENT3D, &[p.to_str().unwrap()], &out, "12×12×1 voxels");
     // A slice large enough for the half-resolution pass is named by its own
     // size, not the halved one.
     let side = 130;

@@ -1,0 +1,118 @@
+//! ImageJ hyperstacks: TIFFs whose pages interleave channels or time points.
+//!
+//! Fiji stores a hyperstack of C channels, Z slices and T frames as C·Z·T
+//! pages back to back, saying so only in its `ImageJ=` description
+//! (`channels=`, `slices=`, `frames=`). Read page by page it looks like one
+//! stack of C·Z·T slices, and segmenting that would mix channels and time
+//! points into one "volume" without a word. The readers refuse it instead,
+//! naming the extents, so the user picks one channel and one time point.
+//!
+//! Only pages that interleave two of these axes are refused: a single run of
+//! pages is one sequence whatever ImageJ calls it, and tifffile's
+//! `imwrite(..., imagej=True)` of a 3-D array declares `channels=N` for what
+//! its writer meant as N slices.
+
+/// The channels, slices and frames an `ImageJ=` description declares
+/// (each 1 when not given).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Hyperstack {
+    /// Channels (`channels=`).
+    pub channels: usize,
+    /// Z slices (`slices=`).
+    pub slices: usize,
+    /// Time points (`frames=`).
+    pub frames: usize,
+}
+
+impl Hyperstack {
+    /// Reads the extents from a TIFF `ImageDescription`; `None` unless it is
+    /// an `ImageJ=` description with more than one of at least two of them
+    /// (one run of slices, channels or frames is read as a stack).
+    pub fn from_description(description: &str) -> Option<Self> {
+        if !description.starts_with("ImageJ=") {
+            return None;
+        }
+        let count = |key: &str| {
+            description
+                .lines()
+                .find_map(|l| l.strip_prefix(key))
+                .and_then(|v| v.trim().parse::<usize>().ok())
+                .filter(|&n| n > 0)
+                .unwrap_or(1)
+        };
+        let stack = Hyperstack {
+            channels: count("channels="),
+            slices: count("slices="),
+            frames: count("frames="),
+        };
+        let interleaved = [stack.channels, stack.slices, stack.frames]
+            .iter()
+            .filter(|&&n| n > 1)
+            .count()
+            > 1;
+        interleaved.then_some(stack)
+    }
+
+    /// The hyperstack the current TIFF page's description declares, if any.
+    pub fn of_tiff<R: std::io::Read + std::io::Seek>(
+        dec: &mut tiff::decoder::Decoder<R>,
+    ) -> Option<Self> {
+        match dec.find_tag(tiff::tags::Tag::ImageDescription) {
+            Ok(Some(tiff::decoder::ifd::Value::Ascii(d))) => Self::from_description(&d),
+            _ => None,
+        }
+    }
+
+    /// Why such a file is refused, and what to do instead.
+    pub fn refusal(&self) -> String {
+        format!(
+            "an ImageJ hyperstack of {} × {} × {}; its pages are not one volume: \
+             save one channel at one time point (Fiji: Image › Duplicate…) and segment that",
+            counted(self.channels, "channel"),
+            counted(self.slices, "slice"),
+            counted(self.frames, "time point")
+        )
+    }
+}
+
+/// `n` and the noun, in the plural unless `n` is 1.
+fn counted(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn two_interleaved_axes_make_a_hyperstack() {
+        let d = "ImageJ=1.11a\nimages=32\nchannels=2\nslices=8\nframes=2\nhyperstack=true\n";
+        let h = Hyperstack::from_description(d).unwrap();
+        assert_eq!((h.channels, h.slices, h.frames), (2, 8, 2));
+        let t = "ImageJ=1.53t\nimages=12\nslices=4\nframes=3\n";
+        assert_eq!(Hyperstack::from_description(t).unwrap().frames, 3);
+    }
+
+    #[test]
+    fn one_run_of_pages_or_another_description_is_not_one() {
+        let z = "ImageJ=1.11a\nimages=24\nslices=24\nunit=um\nspacing=2.0\n";
+        assert_eq!(Hyperstack::from_description(z), None);
+        // tifffile's description of a 3-D array written with imagej=True.
+        let c = "ImageJ=1.11a\nimages=24\nchannels=24\nhyperstack=true\nmode=grayscale\n";
+        assert_eq!(Hyperstack::from_description(c), None);
+        let t = "ImageJ=1.53t\nimages=6\nframes=6\n";
+        assert_eq!(Hyperstack::from_description(t), None);
+        assert_eq!(
+            Hyperstack::from_description("{\"shape\": [2, 8, 32]}"),
+            None
+        );
+        assert_eq!(
+            Hyperstack::from_description("ImageJ=1.5\nchannels=1\n"),
+            None
+        );
+    }
+}
