@@ -21,7 +21,6 @@ use super::image::ImageView;
 use super::integrate::PhaseStats;
 use super::params::{ForceModel, JunctionForce};
 use super::raster::Raster;
-use super::sample_memo::SampleMemo;
 use crate::complex::{
     CellId, Complex, InterfaceFacet, InterfaceFacets, Label, VertexId, VertexKind,
 };
@@ -130,9 +129,6 @@ pub struct ForceField<K: Dim> {
     facets: Vec<Facet>,
     /// The image samples of the facets, taken ahead on several threads.
     sampled: FacetSamples<K::Point>,
-    /// The facets' intensities of the last computation, for the facets
-    /// whose corners have not moved.
-    memo: SampleMemo<K::Point>,
     /// Vertices the boundary Laplacian acts on (on the interface, off the border).
     active: Vec<u32>,
     /// Per-vertex, per-phase neighbour sums of the boundary Laplacian.
@@ -156,7 +152,6 @@ impl<K: Raster> ForceField<K> {
             stretching: Vec::new(),
             facets: Vec::new(),
             sampled: FacetSamples::default(),
-            memo: SampleMemo::default(),
             active: Vec::new(),
             slot_sums: Vec::new(),
             scratch: Vec::new(),
@@ -166,27 +161,17 @@ impl<K: Raster> ForceField<K> {
         }
     }
 
-    /// From the next computation on, every facet samples the image again
-    /// (the image sampled changes).
-    pub fn forget_samples(&mut self) {
-        self.memo.forget();
-    }
-
     /// The force kind of `v` from the last computation.
     pub fn kind(&self, v: VertexId) -> ForceKind {
         self.kinds.get(v.index()).copied().unwrap_or(ForceKind::Off)
     }
 
     /// Computes the external, bending and stretching terms of every vertex of
-    /// `complex` for force evaluation `evaluation` (the driver's count), in
-    /// four stages: what each vertex is, the facets' region force and
-    /// boundary neighbours, the smoothing directions, and each vertex's
-    /// external force. A facet whose corners have not moved since
-    /// evaluation `evaluation − 1` takes that evaluation's image samples
-    /// (`sample_memo`): the same forces, to the bit, as sampling again.
+    /// `complex`, in four stages: what each vertex is, the facets' region
+    /// force and boundary neighbours, the smoothing directions, and each
+    /// vertex's external force.
     pub fn compute(
         &mut self,
-        evaluation: u64,
         complex: &Complex<K>,
         image: &ImageView<'_>,
         phases: &PhaseStats,
@@ -195,7 +180,7 @@ impl<K: Raster> ForceField<K> {
         #[cfg(test)]
         tests::COMPUTATIONS.with(|c| c.set(c.get() + 1));
         self.classify_vertices(complex);
-        self.integrate_facets(evaluation, complex, image, phases, s);
+        self.integrate_facets(complex, image, phases, s);
         self.smoothing_directions(complex);
         self.resolve_external(s.junction);
     }
@@ -269,7 +254,6 @@ impl<K: Raster> ForceField<K> {
     /// and its region force ([`add_region_force`](Self::add_region_force)).
     fn integrate_facets(
         &mut self,
-        evaluation: u64,
         complex: &Complex<K>,
         image: &ImageView<'_>,
         phases: &PhaseStats,
@@ -279,8 +263,6 @@ impl<K: Raster> ForceField<K> {
         self.interface_measure = 0.0;
         // The sample spacing in the image's unit, once for every facet.
         let spacing = s.spacing * image.sample_step();
-        self.memo
-            .begin::<K>(evaluation, complex.cell_capacity(), image, spacing);
         if K::N == 3 && rayon::current_num_threads() > 1 {
             self.integrate_facets_sampled_ahead(complex, image, phases, s, spacing);
             return;
@@ -291,10 +273,7 @@ impl<K: Raster> ForceField<K> {
             self.add_facet_topology(&facet);
             samples.clear();
             if let Some(means) = region_means(&facet, phases, s) {
-                let known = self.memo.lookup::<K>(&facet);
-                sample_facet::<K>(&facet, image, spacing, known, &mut samples);
-                self.memo
-                    .record::<K>(&facet, samples.iter().map(|x| x.intensity));
+                sample_facet::<K>(&facet, image, spacing, &mut samples);
                 self.add_region_force(&facet, means, &samples, phases, s);
             }
         }
@@ -322,13 +301,11 @@ impl<K: Raster> ForceField<K> {
             if sampled.block.is_empty() {
                 break;
             }
-            sampled.sample_block::<K>(image, phases, s, spacing, &self.memo);
+            sampled.sample_block::<K>(image, phases, s, spacing);
             for (facet, samples) in sampled.block_samples() {
                 self.interface_measure += facet.measure;
                 self.add_facet_topology(facet);
                 if let Some(means) = region_means(facet, phases, s) {
-                    self.memo
-                        .record::<K>(facet, samples.iter().map(|x| x.intensity));
                     self.add_region_force(facet, means, samples, phases, s);
                 }
             }
@@ -682,25 +659,18 @@ struct FacetSample {
 }
 
 /// Appends the image samples of `facet`, every `spacing` along it (in the
-/// image's unit), to `out`; the intensities are taken from `known` (the
-/// facet's from the last computation, its corners unmoved) where given.
+/// image's unit), to `out`.
 fn sample_facet<K: Raster>(
     facet: &InterfaceFacet<K::Point>,
     image: &ImageView<'_>,
     spacing: f64,
-    known: Option<&[f64]>,
     out: &mut Vec<FacetSample>,
 ) {
-    let mut n = 0;
     K::facet_samples(&facet.points[..K::N], spacing, &mut |p, w, ds| {
         let mut weights = [0.0; 3];
         weights[..w.len()].copy_from_slice(w);
-        let intensity = known
-            .and_then(|k| k.get(n).copied())
-            .unwrap_or_else(|| K::sample(image, p));
-        n += 1;
         out.push(FacetSample {
-            intensity,
+            intensity: K::sample(image, p),
             weights,
             ds,
         });
@@ -758,7 +728,6 @@ impl<P: Point> FacetSamples<P> {
         phases: &PhaseStats,
         s: &ForceSettings,
         spacing: f64,
-        memo: &SampleMemo<P>,
     ) {
         let chunks = self.block.len().div_ceil(FACET_CHUNK);
         if self.chunks.len() < chunks {
@@ -772,8 +741,7 @@ impl<P: Point> FacetSamples<P> {
                 chunk.ends.clear();
                 for facet in facets {
                     if region_means(facet, phases, s).is_some() {
-                        let known = memo.lookup::<K>(facet);
-                        sample_facet::<K>(facet, image, spacing, known, &mut chunk.samples);
+                        sample_facet::<K>(facet, image, spacing, &mut chunk.samples);
                     }
                     chunk.ends.push(chunk.samples.len());
                 }
@@ -830,10 +798,10 @@ pub(crate) mod tests {
     use crate::dim::D3;
     use std::cell::Cell;
 
-    /// A 24³ box meshed at edge length 1.5 holding three phases (a ball cut
-    /// in two halves on a background: more than one block of facets, triple
-    /// junctions along the cut's rim), its volume, means and settings.
-    fn three_phases() -> (Complex<D3>, Vec<f32>, PhaseStats, ForceSettings) {
+    /// The forces of a 24³ box meshed at edge length 1.5 holding three
+    /// phases (a ball cut in two halves on a background: more than one block
+    /// of facets, triple junctions along the cut's rim), on `threads` threads.
+    fn forces_on(threads: usize) -> ForceField<D3> {
         let n = 24;
         let mut complex = Complex::<D3>::cuboid([n as f64; 3], 1.5).unwrap();
         let centre = n as f64 / 2.0;
@@ -850,6 +818,7 @@ pub(crate) mod tests {
         let voxels: Vec<f32> = (0..n * n * n)
             .map(|i| ((i * 7919) % 1009) as f32 / 1009.0)
             .collect();
+        let image = ImageView::new_3d([n, n, n], &voxels).unwrap();
         let mut phases = PhaseStats::new(3);
         phases.mean = vec![Some(0.2), Some(0.5), Some(0.8)];
         let settings = ForceSettings {
@@ -858,70 +827,15 @@ pub(crate) mod tests {
             spacing: 0.5,
             equal_means: 1e-6,
         };
-        (complex, voxels, phases, settings)
-    }
-
-    fn on_threads<T: Send>(threads: usize, run: impl FnOnce() -> T + Send) -> T {
-        rayon::ThreadPoolBuilder::new()
+        let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
-            .unwrap()
-            .install(run)
-    }
-
-    /// The forces of [`three_phases`] on `threads` threads.
-    fn forces_on(threads: usize) -> ForceField<D3> {
-        let (complex, voxels, phases, settings) = three_phases();
-        let image = ImageView::new_3d([24; 3], &voxels).unwrap();
-        on_threads(threads, || {
+            .unwrap();
+        pool.install(|| {
             let mut field = ForceField::new();
-            field.compute(1, &complex, &image, &phases, &settings);
+            field.compute(&complex, &image, &phases, &settings);
             field
         })
-    }
-
-    fn bits(f: &ForceField<D3>) -> Vec<u64> {
-        [&f.external, &f.bending, &f.stretching]
-            .iter()
-            .flat_map(|field| field.iter().flat_map(|p| p.iter().map(|x| x.to_bits())))
-            .collect()
-    }
-
-    #[test]
-    fn forces_from_remembered_samples_are_those_sampled_again() {
-        for threads in [1, 2] {
-            let (mut complex, voxels, phases, settings) = three_phases();
-            let image = ImageView::new_3d([24; 3], &voxels).unwrap();
-            let mut remembering = ForceField::new();
-            on_threads(threads, || {
-                remembering.compute(1, &complex, &image, &phases, &settings)
-            });
-            let some: Vec<VertexId> = complex.vertex_ids().step_by(7).collect();
-            for v in some {
-                let p = complex.position(v);
-                complex.set_position(v, p + nalgebra::Vector3::new(0.05, -0.03, 0.02));
-            }
-            // some facets will take their samples from the memo, some sample again
-            let mut probe = remembering.memo.clone();
-            let spacing = settings.spacing * image.sample_step();
-            probe.begin::<D3>(2, complex.cell_capacity(), &image, spacing);
-            let unmoved = complex
-                .interface_facets()
-                .filter(|f| probe.lookup::<D3>(f).is_some())
-                .count();
-            let all = complex.interface_facets().count();
-            assert!(0 < unmoved && unmoved < all, "{unmoved} of {all}");
-            on_threads(threads, || {
-                remembering.compute(2, &complex, &image, &phases, &settings)
-            });
-            let fresh = on_threads(threads, || {
-                let mut field = ForceField::new();
-                field.compute(1, &complex, &image, &phases, &settings);
-                field
-            });
-            assert!(fresh.external.iter().any(|p| p.norm() > 0.0));
-            assert_eq!(bits(&remembering), bits(&fresh));
-        }
     }
 
     #[test]
@@ -933,6 +847,12 @@ pub(crate) mod tests {
             one.facets.len()
         );
         assert!(one.junctions.0 > 0, "no triple junction");
+        let bits = |f: &ForceField<D3>| -> Vec<u64> {
+            [&f.external, &f.bending, &f.stretching]
+                .iter()
+                .flat_map(|field| field.iter().flat_map(|p| p.iter().map(|x| x.to_bits())))
+                .collect()
+        };
         assert!(one.external.iter().any(|p| p.norm() > 0.0));
         assert_eq!(one.kinds, two.kinds);
         assert_eq!(one.junctions, two.junctions);

@@ -14,8 +14,6 @@
 //! - [`thresholds`]: least-variance histogram splits (multi-Otsu, k-means++);
 //! - [`init`]: histogram, range/interval, disk and label-image initialisations;
 //! - [`forces`]: region forces (eqs. 5–7) and rigidity (eq. 2);
-//! - `sample_memo`: the forces' image samples of the facets whose corners
-//!   did not move, kept from one force evaluation to the next;
 //! - [`smoothing`]: the image the region force samples (in 2D under noise,
 //!   smoothed by a Gaussian that follows the noise);
 //! - `force_stage`: an iteration's force terms summed, its step and the
@@ -79,7 +77,6 @@ pub mod raster;
 pub mod relaxed_length;
 pub mod reseed;
 pub mod reseed_trial;
-mod sample_memo;
 pub mod smoothing;
 mod step_gain;
 pub mod thresholds;

@@ -85,8 +85,7 @@ impl<K: Raster> PaperField<K> {
             let mut settings = c.settings;
             settings.equal_means = 1e-6 * (state.range.1 - state.range.0);
             let image = c.image.view(state.image);
-            c.field
-                .compute(state.evaluation, complex, &image, state.phases, &settings);
+            c.field.compute(complex, &image, state.phases, &settings);
             c.computed_for = Some(state.evaluation);
         }
         cached
@@ -186,7 +185,6 @@ impl<K: Raster> RegionForce<K> {
         let mut cached = self.field.lock();
         cached.image = ForceImage::smoothed(image, sigma);
         cached.computed_for = None;
-        cached.field.forget_samples();
     }
 
     /// The standard deviation in pixels of the Gaussian the sampled image
