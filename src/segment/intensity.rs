@@ -150,10 +150,11 @@ fn rank(n: usize, q: f64) -> usize {
 /// so three quarters of its neighbouring pairs differ by exactly 0 and
 /// their median says "noise-free" however noisy the brain is: the
 /// duplicate-phase tolerance, the re-seeds and the noise correlation figure
-/// then work as on a noise-free image. When every pair gives 0, the pairs
-/// with a sample at the extreme that more samples hold (the mask's value;
-/// both extremes if they are held by as many, so that `−I` gives what `I`
-/// gives) are left out. Only the one: on a noise-free image with blurred
+/// then work as on a noise-free image (and padding over less than half the
+/// image still pulls the median down). Where the extreme that more samples
+/// hold is padding ([`is_padding`]), or when every pair gives 0, the pairs
+/// with a sample at it (the mask's value; both extremes if they are held by
+/// as many, so that `−I` gives what `I` gives) are left out. Only the one: on a noise-free image with blurred
 /// edges, leaving out both extremes of two phases would leave the edges'
 /// pairs alone, and their differences would read as noise; with the
 /// dominant one left out, the other phase's flat interior still gives 0.
