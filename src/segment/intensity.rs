@@ -42,9 +42,10 @@ pub struct IntensityStats {
     /// the extreme (minimum or maximum) that more samples hold: the input is
     /// mostly one exact value (a skull-stripped MRI, a CT outside its field
     /// of view, a registered image's padding), whose pairs would make the
-    /// estimate 0 whatever the noise of the rest. Only when every pair gives
-    /// 0; a noise-free image still gives 0 from the rest (the flat
-    /// interiors of its other phases).
+    /// estimate 0, or pull it down, whatever the noise of the rest. Only
+    /// where that extreme forms regions (padding) or every pair gives 0; a
+    /// noise-free image still gives 0 from the rest (the flat interiors of
+    /// its other phases).
     pub noise_excludes_extremes: bool,
     /// A lower bound of the correlation of neighbouring samples' noise
     /// (see [`noise_correlation`](super::noise_correlation)): about 0 for
