@@ -49,11 +49,14 @@ where
         .into_boxed_slice()
         .try_into()
         .expect("BUCKETS counts");
+    // (`for_each` rather than a `for` loop: a chain of adapters, such as
+    // the rows of pairs of the noise estimate, then runs as nested loops
+    // instead of one `next` call per sample)
     let mut n = 0usize;
-    for v in samples() {
+    samples().for_each(|v| {
         counts[bucket(order_key(v))] += 1;
         n += 1;
-    }
+    });
     if n == 0 {
         return None;
     }
@@ -62,13 +65,13 @@ where
     // Each wanted bucket's keys, gathered once (two ranks may share one).
     let mut gathered: [Vec<i32>; R] = std::array::from_fn(|_| Vec::new());
     let owner = |i: usize| (0..=i).find(|&j| places[j].0 == places[i].0).unwrap_or(i);
-    for v in samples() {
+    samples().for_each(|v| {
         let key = order_key(v);
         let b = bucket(key);
         if let Some(i) = (0..R).find(|&i| places[i].0 == b) {
             gathered[i].push(key);
         }
-    }
+    });
     Some(std::array::from_fn(|i| {
         let keys = &mut gathered[owner(i)];
         *keys.select_nth_unstable(places[i].1).1
@@ -76,29 +79,32 @@ where
 }
 
 /// For each of `ranks`, the bucket holding the key of that rank and the
-/// key's rank within the bucket, from the buckets' counts (one scan of
-/// them, the ranks taken in increasing order).
+/// key's rank within the bucket, from the buckets' counts.
 fn places_of_ranks<const R: usize>(counts: &[u32], ranks: [usize; R]) -> [(usize, usize); R] {
-    let mut by_rank: [usize; R] = std::array::from_fn(|i| i);
-    by_rank.sort_unstable_by_key(|&i| ranks[i]);
-    let mut places = [(0, 0); R];
-    let mut next = by_rank.iter().peekable();
+    ranks.map(|rank| place_of_rank(counts, rank))
+}
+
+/// Buckets counted at a time by [`place_of_rank`].
+const BLOCK: usize = 256;
+
+/// The bucket holding the key of rank `rank` and the key's rank within the
+/// bucket: the counts are summed a block at a time (a loop the compiler
+/// vectorises), and only the block holding the rank bucket by bucket.
+fn place_of_rank(counts: &[u32], rank: usize) -> (usize, usize) {
     let mut below = 0usize;
-    for (b, &c) in counts.iter().enumerate() {
-        let c = c as usize;
-        while let Some(&&i) = next.peek() {
-            if ranks[i] >= below + c {
-                break;
+    for (k, block) in counts.chunks(BLOCK).enumerate() {
+        let in_block: usize = block.iter().map(|&c| c as usize).sum();
+        if rank < below + in_block {
+            for (j, &c) in block.iter().enumerate() {
+                if rank < below + c as usize {
+                    return (k * BLOCK + j, rank - below);
+                }
+                below += c as usize;
             }
-            places[i] = (b, ranks[i] - below);
-            next.next();
         }
-        if next.peek().is_none() {
-            return places;
-        }
-        below += c;
+        below += in_block;
     }
-    panic!("a rank of {ranks:?} beyond the {below} samples");
+    panic!("rank {rank} beyond the {below} samples");
 }
 
 #[cfg(test)]
