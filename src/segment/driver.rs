@@ -11,7 +11,7 @@ use super::graded_start::StartGrading;
 use super::image::ImageView;
 use super::integrate::{CellCache, CellStats, PhaseStats};
 use super::intensity::IntensityStats;
-use super::model::{Flow, IterationState, Models};
+use super::model::{Flow, IterationState, LabelRule, Models};
 use super::models::{GivenMesh, PaperField, RegionForce, Rigidity};
 use super::noise_correlation::correlated_noise_warning;
 use super::params::{
@@ -156,8 +156,8 @@ pub struct StageTimes {
     pub setup: f64,
     /// Integrating the image over the cells.
     pub integrate: f64,
-    /// Label flips (on the driver's thread: a check of the rules that ran
-    /// beside the forces, see [`LabelRule::would_relabel`](super::model::LabelRule::would_relabel),
+    /// Label flips (a check of the rules that ran beside the forces, or
+    /// before them on one thread, see [`LabelRule::would_relabel`],
     /// is in `forces`).
     pub flips: f64,
     /// Force computation.
@@ -260,8 +260,8 @@ pub struct Segmentation<'a, K: Raster> {
     /// [`IterationState::evaluation`] of the forces that moved the mesh).
     evaluations: u64,
     /// Whether the label rules can predict their changes
-    /// ([`LabelRule::would_relabel`](super::model::LabelRule::would_relabel)) so that
-    /// they are checked beside the forces.
+    /// ([`LabelRule::would_relabel`]) so that
+    /// they are checked beside (or before) the forces.
     predict_flips: bool,
     nu: f64,
     range: (f64, f64),
@@ -758,15 +758,13 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             self.last_flip_round = iteration;
         }
         // Most iterations flip nothing: after one that flipped nothing, the
-        // rules only check, beside the forces, whether they would flip.
+        // rules only check whether they would flip (beside the forces, on
+        // two threads).
         let mut forces = None;
         if flips_due && self.predict_flips && self.history.last().is_some_and(|r| r.flips == 0) {
             let t = Instant::now();
-            let (computed, would_flip) = self.forces_beside_flip_check(iteration);
+            forces = self.forces_unless_relabelling(iteration);
             self.times.forces += t.elapsed().as_secs_f64();
-            if !would_flip {
-                forces = Some(computed);
-            }
         }
         let cells_before_flips = self.complex.cell_count();
         let mut flips = 0;
@@ -1297,11 +1295,26 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         flips
     }
 
-    /// [`forces_and_destinations`](Self::forces_and_destinations) and, on
-    /// the helper thread meanwhile, whether a label rule would change a
-    /// label ([`would_relabel`](super::model::LabelRule::would_relabel); a rule that cannot tell counts
-    /// as yes, and turns these predictions off for the run).
-    fn forces_beside_flip_check(&mut self, iteration: usize) -> ((f64, Reach), bool) {
+    /// The forces of iteration `iteration`
+    /// ([`forces_and_destinations`](Self::forces_and_destinations)) if no
+    /// label rule would change a label, `None` if one would: the flips then
+    /// come first and the forces are computed after them. With the helper
+    /// thread the rules are asked there while the forces are computed (their
+    /// time hidden behind the forces'); without it, or while it rests, they
+    /// are asked first, so that an iteration that flips computes its forces
+    /// once.
+    fn forces_unless_relabelling(&mut self, iteration: usize) -> Option<(f64, Reach)> {
+        let helper = self.helper.here();
+        if !helper.is_threaded() || helper.is_resting() {
+            let Parts {
+                state,
+                complex,
+                models,
+                ..
+            } = self.parts(iteration);
+            let answer = would_relabel(&mut models.rules, complex, &state);
+            return (!self.predicts_flips(answer)).then(|| self.forces_and_destinations(iteration));
+        }
         self.evaluations += 1;
         let Parts {
             state,
@@ -1313,23 +1326,22 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         } = self.parts(iteration);
         let complex = &*complex;
         let (terms, rules) = (&mut models.forces, &mut models.rules);
-        let (reach, answers) = helper.join(
+        let (reach, answer) = helper.join(
             || force.run(terms, complex, &state, step),
-            || {
-                rules
-                    .iter_mut()
-                    .map(|r| r.would_relabel(complex, &state))
-                    .try_fold(false, |any, a| a.map(|a| any || a))
-            },
+            || would_relabel(rules, complex, &state),
         );
         let computed = (self.interface_length(), reach);
-        match answers {
-            Some(would_flip) => (computed, would_flip),
-            None => {
-                self.predict_flips = false;
-                (computed, true)
-            }
+        (!self.predicts_flips(answer)).then_some(computed)
+    }
+
+    /// Whether the rules' `answer` ([`would_relabel`]) is that a label
+    /// would change; a rule that cannot tell counts as yes, and turns the
+    /// predictions off for the run.
+    fn predicts_flips(&mut self, answer: Option<bool>) -> bool {
+        if answer.is_none() {
+            self.predict_flips = false;
         }
+        answer.unwrap_or(true)
     }
 
     /// Computes the forces of iteration `iteration` and fills the
@@ -1611,4 +1623,21 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
         out
     }
+}
+
+/// Whether one of `rules` would change a label
+/// ([`LabelRule::would_relabel`]),
+/// asking them in order until one says yes; `None` if a rule asked cannot
+/// tell.
+fn would_relabel<K: Raster>(
+    rules: &mut [Box<dyn LabelRule<K>>],
+    complex: &Complex<K>,
+    state: &IterationState<'_, '_>,
+) -> Option<bool> {
+    for rule in rules {
+        if rule.would_relabel(complex, state)? {
+            return Some(true);
+        }
+    }
+    Some(false)
 }

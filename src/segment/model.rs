@@ -299,9 +299,10 @@ pub trait LabelRule<K: Raster>: AsAny + Send {
     /// when it changes no label: the driver then skips it.
     ///
     /// Most iterations flip nothing. When every rule can tell, the driver
-    /// asks them on its second thread while it computes the forces, and runs
-    /// the rules (and the forces again) only if one of them would change a
-    /// label: the same result, the rules' time hidden behind the forces'.
+    /// asks them in order until one says yes, on its second thread while it
+    /// computes the forces (the rules' time hidden behind the forces'), or
+    /// before the forces on one thread; it runs the rules (and then the
+    /// forces) only if one of them would change a label: the same result.
     fn would_relabel(
         &mut self,
         complex: &Complex<K>,

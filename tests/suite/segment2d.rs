@@ -423,9 +423,12 @@ fn absurd_rigidity_is_capped_not_stalled() {
     assert!(r.dice > 0.5, "dice {}", r.dice);
 }
 
-/// The driver checks the label rules beside the forces (and runs them only
-/// if one would flip): the run is the one of rules that cannot predict,
-/// which the driver runs before the forces every iteration.
+/// The driver checks the label rules beside the forces, or before them on
+/// one thread (and runs them only if one would flip): the run is the one of
+/// rules that cannot predict, which the driver runs before the forces every
+/// iteration. Both ways: on this thread, with the helper where the test
+/// runs with more than one thread, and on a worker of a one-thread pool,
+/// where the driver has no helper.
 #[test]
 fn predicted_flips_give_the_run_of_rules_run_every_iteration() {
     use dsc_seg::complex::Complex2;
@@ -459,6 +462,11 @@ fn predicted_flips_give_the_run_of_rules_run_every_iteration() {
         (seg.history().to_vec(), seg.label_image())
     };
     let (predicted, labels) = run(Models::paper(&params));
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let (predicted_first, labels_first) = one_thread.install(|| run(Models::paper(&params)));
     let mut opaque = Models::paper(&params);
     opaque.rules = opaque
         .rules
@@ -466,13 +474,16 @@ fn predicted_flips_give_the_run_of_rules_run_every_iteration() {
         .map(|r| Box::new(Opaque(r)) as Box<dyn LabelRule<D2>>)
         .collect();
     let (every, labels_every) = run(opaque);
-    assert_eq!(labels, labels_every);
-    assert_eq!(predicted.len(), every.len());
-    for (a, b) in predicted.iter().zip(&every) {
-        assert_eq!((a.flips, a.energy.to_bits()), (b.flips, b.energy.to_bits()));
+    for (predicted, labels) in [(&predicted, &labels), (&predicted_first, &labels_first)] {
+        assert_eq!(labels, &labels_every);
+        assert_eq!(predicted.len(), every.len());
+        for (a, b) in predicted.iter().zip(&every) {
+            assert_eq!((a.flips, a.energy.to_bits()), (b.flips, b.energy.to_bits()));
+        }
     }
     // Flips after a quiet iteration: the forces computed beside the check
-    // were discarded and computed again after the flips.
+    // were discarded and computed again after the flips (on one thread,
+    // computed once, after them).
     assert!(
         predicted
             .windows(2)
