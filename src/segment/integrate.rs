@@ -83,13 +83,15 @@ pub(crate) struct CellCache<K: Dim> {
     halves: [Refresh; 2],
 }
 
-/// Scratch of one range of cells: the changed ones with their ordering
-/// key, their statistics, a pair buffer.
+/// Scratch of one range of cells: the changed ones with their rows
+/// ([`first_corner_row`]), their statistics, a pair buffer, and the
+/// buffers of [`order_by_row`].
 #[derive(Clone, Debug, Default)]
 struct Refresh {
-    changed: Vec<(u64, CellId)>,
+    changed: Vec<(u32, CellId)>,
     fresh: Vec<CellStats>,
     scratch: PairScratch,
+    by_row: RowOrder,
 }
 
 /// Marks a cell id without an entry at the previous call.
@@ -189,9 +191,9 @@ impl<K: Raster> CellCache<K> {
                 continue;
             }
             *k = Some(pts);
-            r.changed.push((spatial_key::<K>(&pts), c));
+            r.changed.push((first_corner_row::<K>(&pts), c));
         }
-        r.changed.sort_unstable_by_key(|&(key, _)| key);
+        r.by_row.order(&mut r.changed);
         r.integrate::<K>(image, &self.corners, 0);
         r.store(out, 0)
     }
@@ -306,7 +308,7 @@ struct Previous<'a, K: Dim> {
 impl Refresh {
     /// Carries the previous statistics of the cells `first..first +
     /// stats.len()` whose corners did not change and lists the others,
-    /// in image order (any order gives the same sums; image order makes
+    /// by row ([`RowOrder`]; any order gives the same sums; rows make
     /// neighbouring cells share the rows they read).
     fn scan<K: Raster>(
         &mut self,
@@ -329,10 +331,10 @@ impl Refresh {
             match old.corners.get(was) {
                 Some(Some(before)) if same_corners::<K>(before, &pts) => *s = old.stats[was],
                 // (integrated later)
-                _ => self.changed.push((spatial_key::<K>(&pts), c)),
+                _ => self.changed.push((first_corner_row::<K>(&pts), c)),
             }
         }
-        self.changed.sort_unstable_by_key(|&(key, _)| key);
+        self.by_row.order(&mut self.changed);
     }
 
     /// Integrates the listed cells; `corners` holds the entry of cell
@@ -364,13 +366,50 @@ impl Refresh {
 /// Cells per block of rayon's share of a large integration.
 const PARALLEL_BATCH: usize = 8192;
 
-/// Orders cells by the position of their first corner along the last two
-/// axes: pixel row then column in 2D, slice then row in 3D. Any order gives
-/// the same statistics; this one reads the image nearly in memory order.
+/// The pixel row (2D; the slice in 3D) of a cell's first corner: cells
+/// integrated in this order read the image nearly in memory order. Any
+/// order gives the same statistics (each cell's pixels are summed on their
+/// own).
 #[inline]
-fn spatial_key<K: Dim>(pts: &[K::Point; 4]) -> u64 {
-    let coord = |axis: usize| pts[0][axis].clamp(0.0, u32::MAX as f64) as u64;
-    (coord(K::N - 1) << 32) | coord(K::N - 2)
+fn first_corner_row<K: Dim>(pts: &[K::Point; 4]) -> u32 {
+    pts[0][K::N - 1].clamp(0.0, u32::MAX as f64) as u32
+}
+
+/// Buffers of a counting sort of cells by row.
+#[derive(Clone, Debug, Default)]
+struct RowOrder {
+    /// Per row: the place of its first cell in the order.
+    starts: Vec<u32>,
+    /// The cells in order.
+    sorted: Vec<(u32, CellId)>,
+}
+
+impl RowOrder {
+    /// Orders `cells` by row, keeping their order within a row: linear in
+    /// the cells and the rows (a comparison sort of row and column took
+    /// 4.0 M instructions over a 256² two-phase run's integrations, most
+    /// of them in the first, of every cell; this order 0.9 M).
+    fn order(&mut self, cells: &mut Vec<(u32, CellId)>) {
+        let Some(last_row) = cells.iter().map(|&(row, _)| row).max() else {
+            return;
+        };
+        self.starts.clear();
+        self.starts.resize(last_row as usize + 2, 0);
+        for &(row, _) in cells.iter() {
+            self.starts[row as usize + 1] += 1;
+        }
+        for r in 1..self.starts.len() {
+            self.starts[r] += self.starts[r - 1];
+        }
+        self.sorted.clear();
+        self.sorted.resize(cells.len(), (0, CellId(0)));
+        for &(row, c) in cells.iter() {
+            let place = &mut self.starts[row as usize];
+            self.sorted[*place as usize] = (row, c);
+            *place += 1;
+        }
+        std::mem::swap(cells, &mut self.sorted);
+    }
 }
 
 /// Whether the first `NV` corners are bit-for-bit equal.
