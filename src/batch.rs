@@ -39,7 +39,7 @@ pub enum Task {
     Image {
         /// The parameters (`Init::Labels` loaded per input from `init_labels`).
         params: SegmentParams,
-        /// The label PNG for `Init::Labels`.
+        /// The label image for `Init::Labels`.
         init_labels: Option<PathBuf>,
         /// The channel of colour images to segment (else their luminance).
         channel: Option<usize>,

@@ -14,6 +14,16 @@ pub enum Error {
     /// The segmentation rejected its input or parameters.
     #[error(transparent)]
     Segment(#[from] SegmentError),
+    /// The segmentation rejected the input read from `path` (a constant
+    /// image, one too small to mesh, fewer distinct values than phases):
+    /// the message names the file, as every input error does.
+    #[error("{}: {source}", path.display())]
+    Input {
+        /// The input file or folder.
+        path: PathBuf,
+        /// What the segmentation found wrong with it.
+        source: SegmentError,
+    },
     /// The output directory cannot be created or written.
     #[error("cannot write to output directory {path}: {reason}")]
     OutputDir {
@@ -28,6 +38,21 @@ pub enum Error {
     /// The caller cancelled the run ([`crate::cancel`]); nothing was produced.
     #[error("interrupted")]
     Interrupted,
+}
+
+impl Error {
+    /// `self` naming the input `path` when it is the segmentation's refusal
+    /// of the input itself; a parameter out of its range, or any other
+    /// error (which names its own file), is returned as it is.
+    pub fn naming_input(self, path: &std::path::Path) -> Self {
+        match self {
+            Error::Segment(source) if !source.is_parameter() => Error::Input {
+                path: path.to_path_buf(),
+                source,
+            },
+            other => other,
+        }
+    }
 }
 
 /// Shorthand for results with [`enum@Error`].

@@ -152,7 +152,7 @@ pub enum InitKind {
     Range,
     /// Disks given with --disk, everything else phase 0.
     Disks,
-    /// A label PNG given with --init-labels.
+    /// A label image given with --init-labels.
     Labels,
 }
 
@@ -197,7 +197,8 @@ pub struct SegmentOptions {
         allow_hyphen_values = true
     )]
     pub disks: Vec<String>,
-    /// Label PNG for --init labels (same size as the image, values 0..N-1);
+    /// Label image for --init labels (grayscale, same size as the image,
+    /// values 0..N-1 as stored: 8 or 16 bit, or whole-numbered floats);
     /// implies --init labels.
     #[arg(long)]
     pub init_labels: Option<PathBuf>,
@@ -279,8 +280,9 @@ pub struct Segment3dOptions {
         allow_hyphen_values = true
     )]
     pub balls: Vec<String>,
-    /// Label volume for --init labels (same size as the volume, 8-bit values
-    /// 0..N-1); implies --init labels.
+    /// Label volume for --init labels (same size as the volume, values
+    /// 0..N-1 as stored, of any integer type or whole-numbered floats);
+    /// implies --init labels.
     #[arg(long)]
     pub init_labels: Option<PathBuf>,
     /// Initial surface (closed triangle mesh: OFF, OBJ or STL, in voxel

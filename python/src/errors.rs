@@ -10,7 +10,7 @@ pub fn to_py(e: Error) -> PyErr {
     let msg = e.to_string().replace('\n', " ");
     match e {
         Error::Io(_) | Error::OutputDir { .. } => PyOSError::new_err(msg),
-        Error::Segment(_) | Error::Usage(_) => PyValueError::new_err(msg),
+        Error::Segment(_) | Error::Input { .. } | Error::Usage(_) => PyValueError::new_err(msg),
         Error::Interrupted => PyKeyboardInterrupt::new_err(msg),
     }
 }

@@ -129,7 +129,8 @@ struct Phantom3dArgs {
 #[command(allow_negative_numbers = true)]
 struct SegmentArgs {
     /// Input images (PNG, TIFF, JPEG, ...; 8/16 bit, gray or colour; TIFFs
-    /// of float or signed samples) or folders of them. Without any, a built-in phantom is segmented.
+    /// of float or signed samples; a NIfTI one slice thick) or folders of
+    /// them. Without any, a built-in phantom is segmented.
     images: Vec<PathBuf>,
     /// Output directory (created if missing).
     #[arg(long)]

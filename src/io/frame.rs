@@ -39,6 +39,16 @@ pub enum FrameSource {
     Given,
 }
 
+impl FrameSource {
+    /// Whether the frame is a NIfTI header's.
+    pub fn is_nifti(self) -> bool {
+        matches!(
+            self,
+            FrameSource::NiftiSform | FrameSource::NiftiQform | FrameSource::NiftiPixdim
+        )
+    }
+}
+
 /// How the world axes relate to the index axes (see the module documentation).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Frame {
@@ -79,6 +89,19 @@ impl Frame {
             unit,
             diagonal([sx, sy, 1.0]),
         )
+    }
+
+    /// A 2D image placed in the world by `index_to_world` (the affine of a
+    /// NIfTI file one slice thick); `spacing` is the pixel size and the
+    /// slice's thickness. The mesh works in pixel units, as for every 2D image.
+    pub fn image_affine(
+        width: usize,
+        height: usize,
+        spacing: [f64; 3],
+        unit: &str,
+        index_to_world: Affine,
+    ) -> Self {
+        Frame::pixel_domain([width, height, 1], spacing, unit, index_to_world)
     }
 
     /// A 2D frame whose mesh works in pixel units.
@@ -129,8 +152,9 @@ impl Frame {
             for row in &mut f.index_to_world {
                 row[c] *= ratio;
             }
-            if self.dims[2] == 1 {
-                // A 2D image's offset is its flip, (h−1)·s_y: it scales too.
+            if self.dims[2] == 1 && !self.source.is_nifti() {
+                // A PNG's or TIFF's offset is its flip, (h−1)·s_y: it scales
+                // too (a NIfTI slice keeps its origin, as a volume does).
                 f.index_to_world[c][3] *= ratio;
             }
         }

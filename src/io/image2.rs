@@ -19,8 +19,10 @@
 //! and [`SampleType::to_original`] maps a value back to the file's units.
 //! Colour images are reduced to luminance with the Rec. 709 weights
 //! `0.2126 R + 0.7152 G + 0.0722 B`, applied to the stored (gamma-encoded)
-//! values; alpha is ignored. [`Image2::load_channel`] takes one channel
-//! instead; [`Image2::colour`] says which was done.
+//! values; one whose every pixel is gray (a palette of grays, as GIFs and
+//! some PNGs store them) is read as the gray image it is. Alpha is not used, and pixels that are not fully opaque are
+//! counted ([`Transparency`]) for the run to say so. [`Image2::load_channel`]
+//! takes one channel instead; [`Image2::colour`] says which was done.
 //!
 //! # Orientation
 //!
@@ -39,6 +41,7 @@ use serde::Serialize;
 
 use super::atomic::write_atomic;
 use super::error::{io_reason, IoError, Result};
+use super::frame::Frame;
 
 /// Rec. 709 luminance weights for R, G, B.
 const REC709: [f32; 3] = [0.2126, 0.7152, 0.0722];
@@ -92,6 +95,71 @@ pub struct Image2 {
     sample_type: SampleType,
     colour: Colour,
     spacing: Option<[f64; 2]>,
+    placement: Option<Box<Frame>>,
+    transparency: Transparency,
+}
+
+/// The pixels of an image file with an alpha channel that are not fully
+/// opaque, when the image is segmented by its colour or gray values.
+///
+/// Their alpha is not used: the segmentation has no notion of a pixel that
+/// is not there, and compositing over a background would invent the values
+/// it segments. A transparent pixel's colour values are what the file
+/// holds (often the picture under a mask, or black), so it is segmented by
+/// them, and the run says so (a `warning:` and `report.json`'s `warnings`)
+/// with these counts; `--channel` on the alpha channel segments the alpha
+/// itself. Zero counts (no alpha, or every pixel opaque): nothing to say.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Transparency {
+    /// Pixels whose alpha is below full opacity.
+    pub not_opaque: usize,
+    /// Of those, the pixels whose alpha is 0.
+    pub transparent: usize,
+    /// The index of the alpha channel (`--channel`): 1 gray+alpha, 3 RGBA.
+    pub alpha_channel: usize,
+}
+
+impl Transparency {
+    /// The counts of a decoded image (zero without an alpha channel).
+    fn of(img: &DynamicImage) -> Self {
+        let alphas: Box<dyn Iterator<Item = f32> + '_> = match img {
+            DynamicImage::ImageLumaA8(b) => Box::new(b.pixels().map(|p| p[1] as f32 / 255.0)),
+            DynamicImage::ImageLumaA16(b) => Box::new(b.pixels().map(|p| p[1] as f32 / 65535.0)),
+            DynamicImage::ImageRgba8(b) => Box::new(b.pixels().map(|p| p[3] as f32 / 255.0)),
+            DynamicImage::ImageRgba16(b) => Box::new(b.pixels().map(|p| p[3] as f32 / 65535.0)),
+            DynamicImage::ImageRgba32F(b) => Box::new(b.pixels().map(|p| p[3])),
+            _ => return Transparency::default(),
+        };
+        let mut t = Transparency {
+            alpha_channel: usize::from(img.color().channel_count()) - 1,
+            ..Transparency::default()
+        };
+        for a in alphas {
+            t.not_opaque += usize::from(a < 1.0);
+            t.transparent += usize::from(a <= 0.0);
+        }
+        t
+    }
+
+    /// The warning for `count` pixels of `path`, `None` when all are opaque.
+    pub fn warning(&self, path: &Path, count: usize) -> Option<String> {
+        (self.not_opaque > 0).then(|| {
+            format!(
+                "{} of the {count} pixels of {} are not fully opaque ({} fully transparent); \
+                 the alpha channel is not used, so they are segmented by their {} values \
+                 (--channel {} segments the alpha channel itself)",
+                self.not_opaque,
+                path.display(),
+                self.transparent,
+                if self.alpha_channel == 1 {
+                    "gray"
+                } else {
+                    "colour"
+                },
+                self.alpha_channel
+            )
+        })
+    }
 }
 
 impl Image2 {
@@ -114,6 +182,8 @@ impl Image2 {
             sample_type: SampleType::Float,
             colour: Colour::Gray,
             spacing: None,
+            placement: None,
+            transparency: Transparency::default(),
         }
     }
 
@@ -133,6 +203,8 @@ impl Image2 {
             sample_type: SampleType::Float,
             colour: Colour::Gray,
             spacing: None,
+            placement: None,
+            transparency: Transparency::default(),
         }
     }
 
@@ -167,6 +239,7 @@ impl Image2 {
 
     /// [`load`](Self::load) without the check of the samples.
     fn decode(path: &Path) -> Result<Self> {
+        refuse_empty_file(path)?;
         let reader = ImageReader::open(path)
             .map_err(|e| IoError::unreadable(path, e))?
             .with_guessed_format()
@@ -239,6 +312,8 @@ impl Image2 {
             sample_type,
             colour: Colour::Gray,
             spacing: None,
+            placement: None,
+            transparency: Transparency::default(),
         })
     }
 
@@ -257,6 +332,7 @@ impl Image2 {
     /// [`load_channel`](Self::load_channel) of channel `k`, without the
     /// check of the samples.
     fn decode_channel(path: &Path, k: usize) -> Result<Self> {
+        refuse_empty_file(path)?;
         let reader = ImageReader::open(path)
             .map_err(|e| IoError::unreadable(path, e))?
             .with_guessed_format()
@@ -305,6 +381,10 @@ impl Image2 {
         if width == 0 || height == 0 {
             return Err(IoError::empty(path, &[width, height]));
         }
+        let transparency = match Transparency::of(&img) {
+            t if t.alpha_channel == k => Transparency::default(),
+            t => t,
+        };
         Ok(Image2 {
             width,
             height,
@@ -312,6 +392,8 @@ impl Image2 {
             sample_type,
             colour: Colour::Channel(k),
             spacing: None,
+            placement: None,
+            transparency,
         })
     }
 
@@ -321,17 +403,23 @@ impl Image2 {
         if width == 0 || height == 0 {
             return Err(IoError::empty(path, &[width, height]));
         }
-        let lum = |r: f32, g: f32, b: f32| REC709[0] * r + REC709[1] * g + REC709[2] * b;
-        let colour = if img.color().has_color() {
+        // A palette of grays (a GIF, a PNG saved with a palette) decodes as
+        // colour: its gray values are taken as they are, not as a luminance.
+        let colour = if img.color().has_color() && !is_gray_valued(&img) {
             Colour::Luminance
         } else {
             Colour::Gray
+        };
+        let lum = |r: f32, g: f32, b: f32| match colour {
+            Colour::Luminance => REC709[0] * r + REC709[1] * g + REC709[2] * b,
+            _ => r,
         };
         let sample_type = match img.color().bytes_per_pixel() / img.color().channel_count() {
             1 => SampleType::Uint8,
             2 => SampleType::Uint16,
             _ => SampleType::Float,
         };
+        let transparency = Transparency::of(&img);
         let data: Vec<f32> = match img {
             DynamicImage::ImageLuma8(b) => b.pixels().map(|p| p[0] as f32 / 255.0).collect(),
             DynamicImage::ImageLumaA8(b) => b.pixels().map(|p| p[0] as f32 / 255.0).collect(),
@@ -369,6 +457,8 @@ impl Image2 {
             sample_type,
             colour,
             spacing: None,
+            placement: None,
+            transparency,
         })
     }
 
@@ -391,6 +481,24 @@ impl Image2 {
     /// The image with the given pixel size (see [`Image2::spacing`]).
     pub fn with_spacing(mut self, spacing: Option<[f64; 2]>) -> Self {
         self.spacing = spacing;
+        self
+    }
+
+    /// The file's pixels that are not fully opaque (see [`Transparency`]).
+    pub fn transparency(&self) -> Transparency {
+        self.transparency
+    }
+
+    /// Where the file places the image in the world, when its reader knows
+    /// it beyond the pixel size (a NIfTI slice's affine); `None`: the
+    /// frame follows from the file's format (see `io::resolution`).
+    pub fn placement(&self) -> Option<&Frame> {
+        self.placement.as_deref()
+    }
+
+    /// The image placed in the world by `frame` (see [`Image2::placement`]).
+    pub fn with_placement(mut self, frame: Frame) -> Self {
+        self.placement = Some(Box::new(frame));
         self
     }
 
@@ -483,7 +591,35 @@ pub(crate) fn lerp_nodes(c: f64, n: usize) -> (usize, usize, f32) {
     (i0, i1, (u - i0 as f64) as f32)
 }
 
-/// Maps an `image` crate error to an [`IoError`] naming `path`.
+/// An error naming `path` if it is a file of 0 bytes (an interrupted copy
+/// or download), which the decoders would only call truncated.
+fn refuse_empty_file(path: &Path) -> Result<()> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() && m.len() == 0 => Err(IoError::NotAnImage {
+            path: path.to_path_buf(),
+            reason: "the file is empty (0 bytes)".into(),
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// Whether every pixel of a colour image has equal red, green and blue
+/// values (a gray image stored with a palette or as RGB).
+fn is_gray_valued(img: &DynamicImage) -> bool {
+    fn equal<T: PartialEq>(p: &[T]) -> bool {
+        p[0] == p[1] && p[1] == p[2]
+    }
+    match img {
+        DynamicImage::ImageRgb8(b) => b.pixels().all(|p| equal(&p.0)),
+        DynamicImage::ImageRgba8(b) => b.pixels().all(|p| equal(&p.0)),
+        DynamicImage::ImageRgb16(b) => b.pixels().all(|p| equal(&p.0)),
+        DynamicImage::ImageRgba16(b) => b.pixels().all(|p| equal(&p.0)),
+        DynamicImage::ImageRgb32F(b) => b.pixels().all(|p| equal(&p.0)),
+        DynamicImage::ImageRgba32F(b) => b.pixels().all(|p| equal(&p.0)),
+        _ => false,
+    }
+}
+
 /// Decodes an image the way viewers show it: a JPEG or TIFF photograph
 /// whose EXIF orientation says "rotate" or "mirror" (every phone camera
 /// held upright writes one) is turned upright, so the labels and the
@@ -497,6 +633,7 @@ fn decode_upright(reader: ImageReader<BufReader<File>>) -> ImageResult<DynamicIm
     Ok(image)
 }
 
+/// Maps an `image` crate error to an [`IoError`] naming `path`.
 pub(crate) fn image_error(path: &Path, e: ImageError) -> IoError {
     match e {
         ImageError::Unsupported(u) => IoError::Unsupported {

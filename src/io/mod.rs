@@ -22,7 +22,7 @@ pub use error::IoError;
 pub use frame::{Frame, FrameSource};
 pub use image2::{
     save_gray8_png, save_gray8_png_with_pixel_size, save_image_png, wide_samples_as_f32, Colour,
-    Image2, SampleType,
+    Image2, SampleType, Transparency,
 };
 pub use render::{phase_color, save_gif, Overlay};
 pub use volume::{

@@ -418,6 +418,40 @@ impl Volume {
         parse_nifti(path, &bytes)
     }
 
+    /// A volume one voxel thick (a NIfTI slice) as the 2D image it is:
+    /// its samples as the 2D readers load them (8/16-bit unsigned scaled to
+    /// `[0, 1]`, every other type in the file's values), placed in the world
+    /// by the volume's frame; `None` for a volume of several slices.
+    pub fn to_slice_image(&self) -> Option<Image2> {
+        if self.nz != 1 {
+            return None;
+        }
+        let t = self.sample_type;
+        let map = self.intensity.unwrap_or(IntensityMap::IDENTITY);
+        let data = if map == IntensityMap::of_sample_type(t) {
+            self.data.clone()
+        } else {
+            self.data
+                .iter()
+                .map(|&v| map.original_sample(f64::from(v), t) as f32)
+                .collect()
+        };
+        let frame = self.frame();
+        let placement = Frame::image_affine(
+            self.nx,
+            self.ny,
+            frame.spacing,
+            &frame.unit,
+            frame.index_to_world,
+        )
+        .with_source(frame.source);
+        Some(
+            Image2::from_raw(self.nx, self.ny, data)
+                .with_sample_type(t)
+                .with_placement(placement),
+        )
+    }
+
     /// Number of voxels along x.
     pub fn nx(&self) -> usize {
         self.nx

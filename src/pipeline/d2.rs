@@ -4,14 +4,14 @@
 
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
-    add_frame_and_phases, check_label_range, check_phantom, mean_dice, run_with_progress,
+    add_frame_and_phases, check_phantom, labels_of_samples, mean_dice, run_with_progress,
     GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
 };
 use crate::dim::D2;
 use crate::error::{Error, Result};
 use crate::io::intensity::IntensityMap;
 use crate::io::resolution::{image_frame, is_tiff};
-use crate::io::{save_gray8_png, Colour, Frame, Image2, Overlay};
+use crate::io::{save_gray8_png, Colour, Frame, Image2, IoError, Overlay, Volume};
 use crate::phantom::{self, Phantom2Kind};
 use crate::segment::auto::{choose_phases, PhaseChoice};
 use crate::segment::measurements::Measurements;
@@ -33,7 +33,7 @@ pub struct SegmentJob {
     /// Segmentation parameters. For `Init::Labels` the labels are loaded from
     /// [`SegmentJob::init_labels`].
     pub params: SegmentParams,
-    /// Label PNG for `Init::Labels`.
+    /// Label image for `Init::Labels`.
     pub init_labels: Option<PathBuf>,
     /// The files to write.
     pub outputs: Outputs,
@@ -112,9 +112,18 @@ pub(crate) fn phantom2(name: &str, size: usize, noise: f64) -> Result<Phantom2Ki
     Ok(kind)
 }
 
-/// Loads a label PNG: 8-bit values are the labels.
+/// Loads a label image: each pixel's value as the file stores it is its
+/// phase (8 or 16 bits, or whole-numbered floats). A colour image is
+/// refused: its luminance would be read as labels that no one painted.
 fn load_labels(path: &Path, width: usize, height: usize, phases: usize) -> Result<Vec<u8>> {
     let img = Image2::load(path)?;
+    if img.colour() == Colour::Luminance {
+        return Err(Error::Usage(format!(
+            "init labels {} are a colour image; give a grayscale image whose values are the \
+             phases 0..N-1",
+            path.display()
+        )));
+    }
     if img.width() != width || img.height() != height {
         return Err(Error::Usage(format!(
             "init labels {} are {}×{} but the image is {}×{}",
@@ -125,13 +134,13 @@ fn load_labels(path: &Path, width: usize, height: usize, phases: usize) -> Resul
             height
         )));
     }
-    let labels: Vec<u8> = img
+    let sample_type = img.sample_type();
+    let map = IntensityMap::of_sample_type(sample_type);
+    let stored = img
         .data()
         .iter()
-        .map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-        .collect();
-    check_label_range(&labels, phases, path)?;
-    Ok(labels)
+        .map(|&v| map.original_sample(f64::from(v), sample_type));
+    labels_of_samples(stored, phases, path)
 }
 
 /// Writes a PNG of the segmentation's current mesh over `image` (the image
@@ -162,8 +171,12 @@ pub fn load_image_channel(
     channel: Option<usize>,
 ) -> Result<(Image2, Option<GroundTruth>)> {
     match source {
+        Source::File(path) if crate::io::volume::is_nifti(path) => {
+            Ok((load_nifti_slice(path, channel)?, None))
+        }
         Source::File(path) => {
             refuse_stacks(path)?;
+            refuse_animations(path)?;
             let image = Image2::load_channel(path, channel)?;
             if image.colour() == Colour::Luminance {
                 eprintln!(
@@ -194,16 +207,75 @@ pub fn load_image_channel(
     }
 }
 
-/// A multi-page TIFF is a volume (or a hyperstack, refused by both readers):
-/// `segment` would read its first page only. A NIfTI file is a volume too,
-/// which the image decoders would only call an unknown extension.
-fn refuse_stacks(path: &Path) -> Result<()> {
-    if crate::io::volume::is_nifti(path) {
+/// A NIfTI file one slice thick (`nz = 1`, or a 2D NIfTI) as a 2D image
+/// in the header's frame (pixel size, orientation and origin, as NIfTI
+/// readers place it); a NIfTI of several slices is a volume, refused with a
+/// pointer to `segment3d`. Its one channel is channel 0.
+fn load_nifti_slice(path: &Path, channel: Option<usize>) -> Result<Image2> {
+    let volume = Volume::load_nifti(path)?;
+    let Some(image) = volume.to_slice_image() else {
+        let [nx, ny, nz] = volume.dims();
         return Err(Error::Usage(format!(
-            "{} is a NIfTI volume: `segment` reads 2D images, segment it with `dsc-seg segment3d`",
+            "{} is a NIfTI volume of {nx}×{ny}×{nz} voxels: `segment` reads 2D images, \
+             segment it with `dsc-seg segment3d`",
             path.display()
         )));
+    };
+    match channel {
+        None => Ok(image),
+        Some(0) => Ok(image.with_colour(Colour::Channel(0))),
+        Some(k) => Err(IoError::NoChannel {
+            path: path.to_path_buf(),
+            channel: k,
+            channels: 1,
+        }
+        .into()),
     }
+}
+
+/// An animated GIF or PNG is a sequence of images: `segment` would read its
+/// first frame only, so it is refused, naming its frames.
+fn refuse_animations(path: &Path) -> Result<()> {
+    use image::{ImageFormat, ImageReader};
+    let Ok(reader) = ImageReader::open(path).and_then(ImageReader::with_guessed_format) else {
+        return Ok(()); // the loader reports it
+    };
+    let format = reader.format();
+    let file = std::io::BufReader::new(reader.into_inner());
+    let frames = match format {
+        Some(ImageFormat::Gif) => gif_frames(file),
+        Some(ImageFormat::Png) => png::Decoder::new(file)
+            .read_info()
+            .ok()
+            .and_then(|r| r.info().animation_control.map(|a| a.num_frames.to_string())),
+        _ => None,
+    };
+    match frames {
+        Some(n) if n != "1" => Err(Error::Usage(format!(
+            "{} is an animation of {n} frames: `segment` reads one image; save the frame \
+             to segment as a file of its own",
+            path.display()
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// The frames of a GIF as the refusal names them: `"1"`, or `"2 or more"`
+/// (only the first two are decoded to tell).
+fn gif_frames<R: std::io::BufRead + std::io::Seek>(file: R) -> Option<String> {
+    use image::AnimationDecoder;
+    let gif = image::codecs::gif::GifDecoder::new(file).ok()?;
+    let frames = gif.into_frames().take(2).filter(|f| f.is_ok()).count();
+    Some(if frames > 1 {
+        "2 or more".into()
+    } else {
+        "1".into()
+    })
+}
+
+/// A multi-page TIFF is a volume (or a hyperstack, refused by both readers):
+/// `segment` would read its first page only.
+fn refuse_stacks(path: &Path) -> Result<()> {
     if !crate::io::resolution::is_tiff(path) {
         return Ok(());
     }
@@ -234,7 +306,7 @@ fn refuse_stacks(path: &Path) -> Result<()> {
 }
 
 /// `params` with the labels of `Init::Labels` loaded from `init_labels`
-/// (a label PNG of `width × height`).
+/// (a label image of `width × height`).
 pub fn with_init_labels(
     mut params: SegmentParams,
     init_labels: Option<&Path>,
@@ -344,6 +416,10 @@ pub(crate) fn segment_image_then<T>(
     let ready = ready()?;
 
     let mut report = run_with_progress(&mut seg, params.max_iterations, quiet)?;
+    if let Source::File(path) = &provenance.source {
+        let alpha = image.transparency().warning(path, w * h);
+        report.warnings.splice(0..0, alpha);
+    }
     report
         .warnings
         .extend(phase_choice.iter().flat_map(PhaseChoice::warnings));
@@ -382,12 +458,13 @@ pub(crate) fn segment_image_then<T>(
         phase_choice,
     };
     let mut report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
-    let frame = match &provenance.source {
-        Source::File(path) => image_frame(path, w, h),
-        _ => Frame::image_rows_up(w, h, [1.0, 1.0], "px"),
+    let frame = match (image.placement(), &provenance.source) {
+        (Some(placed), _) => placed.clone(),
+        (None, Source::File(path)) => image_frame(path, w, h),
+        (None, _) => Frame::image_rows_up(w, h, [1.0, 1.0], "px"),
     };
     let frame = match image.spacing() {
-        Some([sx, sy]) => frame.respaced([sx, sy, 1.0]),
+        Some([sx, sy]) => frame.respaced([sx, sy, frame.spacing[2]]),
         None => frame,
     };
     let order = seg.phase_order();

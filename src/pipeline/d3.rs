@@ -5,7 +5,7 @@
 
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
-    add_frame_and_phases, check_label_range, check_phantom, mean_dice, run_with_progress,
+    add_frame_and_phases, check_phantom, labels_of_samples, mean_dice, run_with_progress,
     GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
 };
 use crate::dim::D3;
@@ -32,7 +32,7 @@ pub struct Segment3dJob {
     /// Segmentation parameters (see [`SegmentParams::new_3d`]). For
     /// `Init::Labels` the labels are loaded from [`Segment3dJob::init_labels`].
     pub params: SegmentParams,
-    /// Label volume for `Init::Labels` (8-bit values are the phases).
+    /// Label volume for `Init::Labels` (its values as stored are the phases).
     pub init_labels: Option<PathBuf>,
     /// A closed triangle surface (OFF, OBJ, STL; voxel coordinates, the
     /// volume box `[0, nx]×[0, ny]×[0, nz]`): the initial complex is
@@ -114,7 +114,9 @@ pub(crate) fn phantom3(name: &str, size: usize, noise: f64) -> Result<Phantom3Ki
     Ok(kind)
 }
 
-/// Loads a label volume: values in `[0, 1]` from 8-bit data are scaled back to `0..=255`.
+/// Loads a label volume: each voxel's value as the file stores it is its
+/// phase (8 or 16 bits, signed, or whole-numbered floats: a NIfTI label map
+/// of any type).
 fn load_label_volume(path: &Path, dims: [usize; 3], phases: usize) -> Result<Vec<u8>> {
     let v = Volume::load(path)?;
     if v.dims() != dims {
@@ -125,24 +127,34 @@ fn load_label_volume(path: &Path, dims: [usize; 3], phases: usize) -> Result<Vec
             dims
         )));
     }
-    let labels: Vec<u8> = v.data().iter().map(|&x| to_u8(x as f64)).collect();
-    check_label_range(&labels, phases, path)?;
-    Ok(labels)
+    let map = v.intensity().unwrap_or(IntensityMap::unsigned(8));
+    let sample_type = v.sample_type();
+    let stored = v
+        .data()
+        .iter()
+        .map(|&x| map.original_sample(f64::from(x), sample_type));
+    labels_of_samples(stored, phases, path)
 }
 
-/// A one-page TIFF is a 2D image: `segment3d` could only call it a volume
-/// one voxel thick, too thin to mesh, so it says which command takes it.
-fn refuse_single_page(path: &Path, volume: &Volume) -> Result<()> {
-    if volume.nz() == 1 && crate::io::resolution::is_tiff(path) {
-        return Err(Error::Usage(format!(
-            "{} is {}×{}×1 voxels, one page: a single-page TIFF is a 2D image, \
-             segment it with `dsc-seg segment`",
-            path.display(),
-            volume.nx(),
-            volume.ny()
-        )));
+/// A volume one voxel thick (a one-page TIFF, a NIfTI of one slice, a
+/// folder of one slice) is a 2D image: `segment3d` could only call it too
+/// thin to mesh, so it says which command takes it.
+fn refuse_single_slice(path: &Path, volume: &Volume) -> Result<()> {
+    if volume.nz() != 1 {
+        return Ok(());
     }
-    Ok(())
+    let (nx, ny) = (volume.nx(), volume.ny());
+    let what = if path.is_dir() {
+        format!("holds one slice of {nx}×{ny} pixels: a single slice is a 2D image")
+    } else if crate::io::volume::is_nifti(path) {
+        format!("is {nx}×{ny}×1 voxels, one slice: a single-slice NIfTI is a 2D image")
+    } else {
+        format!("is {nx}×{ny}×1 voxels, one page: a single-page TIFF is a 2D image")
+    };
+    Err(Error::Usage(format!(
+        "{} {what}, segment it with `dsc-seg segment`",
+        path.display()
+    )))
 }
 
 /// Loads (or generates) a 3D input, with the phantom's ground truth.
@@ -150,7 +162,7 @@ pub fn load_volume(source: &Source) -> Result<(Volume, Option<GroundTruth>)> {
     match source {
         Source::File(path) => {
             let volume = Volume::load(path)?;
-            refuse_single_page(path, &volume)?;
+            refuse_single_slice(path, &volume)?;
             Ok((volume, None))
         }
         Source::Phantom {

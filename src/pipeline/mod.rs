@@ -102,8 +102,12 @@ pub trait Job {
             truth,
             load_seconds: t_load.elapsed().as_secs_f64(),
         };
-        let (result, stage) =
-            self.segment_then(&input, params, provenance, || Staging::new(self.out()))?;
+        let (result, stage) = self
+            .segment_then(&input, params, provenance, || Staging::new(self.out()))
+            .map_err(|e| match self.source() {
+                Source::File(path) => e.naming_input(path),
+                _ => e,
+            })?;
         result.write_staged(stage, self.out(), self.outputs())?;
         Ok(result.summary)
     }
@@ -301,15 +305,35 @@ pub(crate) fn check_phantom(
     Ok(())
 }
 
-/// Checks that the initial labels loaded from `path` all lie below `phases`.
-pub(crate) fn check_label_range(labels: &[u8], phases: usize, path: &Path) -> Result<()> {
-    match labels.iter().max() {
-        Some(&m) if m as usize >= phases => Err(Error::Usage(format!(
-            "init labels {} use label {m}, but labels must be below the number of phases ({phases})",
-            path.display()
-        ))),
-        _ => Ok(()),
+/// The phases of an initial labelling read from `path`, from its samples as
+/// the file stores them (`stored`: an 8-bit, 16-bit, signed or float image
+/// alike, so that a 16-bit label image's 1 is phase 1, not 1/65535 of the
+/// 8-bit range): each must be a whole number below `phases`.
+pub(crate) fn labels_of_samples(
+    stored: impl Iterator<Item = f64>,
+    phases: usize,
+    path: &Path,
+) -> Result<Vec<u8>> {
+    let mut labels = Vec::with_capacity(stored.size_hint().0);
+    for v in stored {
+        let label = v.round();
+        if !(label >= 0.0 && (v - label).abs() <= 1e-3) {
+            return Err(Error::Usage(format!(
+                "init labels {} hold the value {v}, which is not a phase number \
+                 (labels are whole numbers from 0 to the number of phases − 1)",
+                path.display()
+            )));
+        }
+        if label >= phases as f64 {
+            return Err(Error::Usage(format!(
+                "init labels {} use label {label}, but labels must be below the number of \
+                 phases ({phases})",
+                path.display()
+            )));
+        }
+        labels.push(label as u8);
     }
+    Ok(labels)
 }
 
 /// Mean Dice over the truth's phases (labels already in the same order).

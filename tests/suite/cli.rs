@@ -713,7 +713,8 @@ fn a_nifti_given_to_segment_points_to_segment3d() {
         &SEGMENT,
         &[p.to_str().unwrap()],
         &empty_out(&d),
-        "is a NIfTI volume: `segment` reads 2D images, segment it with `dsc-seg segment3d`",
+        "volume.nii.gz is a NIfTI volume of 4×4×3 voxels: `segment` reads 2D images, \
+         segment it with `dsc-seg segment3d`",
     );
 }
 

@@ -11,6 +11,7 @@ mod dsc3d;
 mod figures;
 mod forces;
 mod generic;
+mod inputs;
 mod intensity;
 mod measures;
 mod messages;
