@@ -361,3 +361,49 @@ fn an_animated_gif_is_refused() {
         &d.path().join("still"),
     );
 }
+
+/// A NIfTI label map's values are its phases whatever its type: a float
+/// (or int16) map of 0 and 1 was stretched to 0 and 255 and refused.
+#[test]
+fn a_nifti_label_map_is_read_as_stored() {
+    let d = tmp();
+    let n = 12;
+    let inside = |i: usize| (n / 4..3 * n / 4).contains(&i);
+    let cube = |x, y, z| u8::from(inside(x) && inside(y) && inside(z));
+    let mut values = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                values.push(70 + 110 * cube(x, y, z) + ((x * 7 + y * 13 + z * 5) % 11) as u8 * 3);
+            }
+        }
+    }
+    let volume = d.path().join("cube.tif");
+    dsc_seg::io::save_labels_tiff(&volume, [n; 3], &values, None).unwrap();
+    let volume = volume.to_str().unwrap();
+    let label_map = |name: &str, phase: f32| {
+        let p = d.path().join(name);
+        let labels = Volume::from_fn(n, n, n, |x, y, z| phase * f32::from(cube(x, y, z)));
+        save_nifti(&p, &labels).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let ones = label_map("ones.nii.gz", 1.0);
+    succeeds(
+        &[
+            "segment3d",
+            volume,
+            "--init-labels",
+            &ones,
+            "--max-iterations",
+            "2",
+        ],
+        &d.path().join("run"),
+    );
+    let twos = label_map("twos.nii.gz", 2.0);
+    fails(
+        &SEGMENT3D,
+        &[volume, "--init-labels", &twos],
+        &empty_out(&d),
+        "twos.nii.gz use label 2, but labels must be below the number of phases (2)",
+    );
+}
