@@ -40,6 +40,7 @@ use super::integrate::PhaseStats;
 use super::params::SegmentParams;
 use super::partial_volume::phase_plateaus;
 use super::raster::Raster;
+use super::reseed::plateau_twins;
 use super::Segmentation;
 use crate::complex::{Complex, Label};
 use serde::Serialize;
@@ -224,16 +225,10 @@ fn shared_plateau(
             "phase {k} has no pixel beyond the blur of its edges (a thin structure or a band)"
         ));
     }
-    let mut sorted: Vec<(f64, usize)> = plateaus
-        .iter()
-        .enumerate()
-        .filter_map(|(k, p)| p.map(|p| (p, k)))
-        .collect();
-    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
-    sorted.windows(2).find(|w| w[1].0 - w[0].0 < tolerance).map(|w| {
+    plateau_twins(&plateaus, tolerance).first().map(|&(a, b)| {
+        let (pa, pb) = (plateaus[a].unwrap_or(f64::NAN), plateaus[b].unwrap_or(f64::NAN));
         format!(
-            "phases {} and {} have the same plateau ({:.6} and {:.6}) within the noise: one phase whose parts differ by blur",
-            w[0].1, w[1].1, w[0].0, w[1].0
+            "phases {a} and {b} have the same plateau ({pa:.6} and {pb:.6}) within the noise: one phase whose parts differ by blur"
         )
     })
 }

@@ -65,6 +65,19 @@ pub enum LostPhase {
         /// its nearest-mean range.
         looks_like: u64,
     },
+    /// Away from the blur of every edge the phase and its twin have the
+    /// same intensity within the noise ([`plateau_twins`]): one region that
+    /// noise or blur divides, not two. Their means can still differ by more
+    /// than the noise, since each holds the pixels on its own side of the
+    /// split (a flat image asked for two phases splits at its mean, into
+    /// phases a third of the noise apart). Reported at the end of a run,
+    /// never re-seeded.
+    SharedPlateau {
+        /// The smaller of the two phases.
+        phase: Label,
+        /// The phase whose plateau it shares.
+        twin: Label,
+    },
 }
 
 impl LostPhase {
@@ -75,7 +88,8 @@ impl LostPhase {
             | LostPhase::Duplicate { phase: l, .. }
             | LostPhase::Band { phase: l, .. }
             | LostPhase::Vestige { phase: l, .. }
-            | LostPhase::Absorbed { phase: l, .. } => l,
+            | LostPhase::Absorbed { phase: l, .. }
+            | LostPhase::SharedPlateau { phase: l, .. } => l,
         }
     }
 
@@ -123,6 +137,13 @@ impl LostPhase {
                  --length-weight or --edge-length, or finer voxels, may keep it)",
                 phase(l)
             ),
+            LostPhase::SharedPlateau { phase: a, twin: b } => {
+                let (lo, hi) = (phase(a).min(phase(b)), phase(a).max(phase(b)));
+                format!(
+                    "phases {lo} and {hi} have the same intensity away from their edges, \
+                     within the noise: one region divided by noise or blur, not two"
+                )
+            }
         }
     }
 }
@@ -173,6 +194,34 @@ pub fn lost_phases(phases: &PhaseStats, tolerance: f64) -> Vec<LostPhase> {
         }
     }
     lost
+}
+
+/// The pairs of phases whose `plateaus` (each phase's mean over its pixels
+/// beyond the blur of every edge, `None` without such pixels;
+/// [`super::partial_volume::phase_plateaus`]) differ by less than
+/// `tolerance`, adjacent in plateau order, each phase in at most one pair.
+///
+/// The plateau is the piecewise-constant model's level of a region; the mean
+/// is not, since it also holds the edges' blur and, where noise divides a
+/// region, the side of the noise each phase took.
+pub fn plateau_twins(plateaus: &[Option<f64>], tolerance: f64) -> Vec<(usize, usize)> {
+    let mut sorted: Vec<(f64, usize)> = plateaus
+        .iter()
+        .enumerate()
+        .filter_map(|(k, p)| p.map(|p| (p, k)))
+        .collect();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut twins = Vec::new();
+    let mut i = 0;
+    while i + 1 < sorted.len() {
+        if sorted[i + 1].0 - sorted[i].0 < tolerance {
+            twins.push((sorted[i].1, sorted[i + 1].1));
+            i += 2;
+        } else {
+            i += 1;
+        }
+    }
+    twins
 }
 
 /// The phases present in fewer pixels or voxels than `cell` (one regular
@@ -304,6 +353,25 @@ mod tests {
         let text = LostPhase::Empty(1).describe(&[0, 1]);
         assert!(text.contains("phase 1 covers no pixel or voxel"), "{text}");
         assert!(!text.contains("labels.png"), "{text}");
+    }
+
+    /// Plateaus closer than the tolerance pair up with their neighbour in
+    /// plateau order, each phase once; phases without a plateau are skipped.
+    #[test]
+    fn phases_pair_up_by_close_plateaus() {
+        let plateaus = [
+            Some(0.50),
+            Some(0.10),
+            None,
+            Some(0.52),
+            Some(0.53),
+            Some(0.90),
+        ];
+        assert_eq!(plateau_twins(&plateaus, 0.05), vec![(0, 3)]);
+        assert_eq!(plateau_twins(&plateaus, 0.025), vec![(0, 3)]);
+        assert_eq!(plateau_twins(&plateaus, 0.015), vec![(3, 4)]);
+        assert!(plateau_twins(&plateaus, 0.01).is_empty());
+        assert!(plateau_twins(&[Some(0.5), None], 1.0).is_empty());
     }
 
     /// A phase of one voxel is a vestige where a cell holds more; an empty

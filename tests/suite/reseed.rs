@@ -83,6 +83,45 @@ fn too_many_phases_give_a_warning() {
     assert!(!report.warnings.is_empty(), "{report:?}");
 }
 
+/// A flat image under noise asked for two phases splits its noise at the
+/// mean: two phases whose means differ by about a third of the noise, more
+/// than the duplicate tolerance, each in dozens of pieces. Away from their
+/// edges the two have the same intensity, and the report must say so rather
+/// than pass the split for two regions. An image of two regions at the same
+/// noise gives no such warning.
+#[test]
+fn a_flat_image_split_by_its_noise_is_reported() {
+    let (w, h) = (256, 256);
+    let mut flat = vec![0.5f32; w * h];
+    // (of three noise seeds the third splits; the others end with an empty
+    // phase, which is reported as such)
+    add_gaussian_noise(&mut flat, 0.1, 3);
+    let view = ImageView::new_2d(w, h, &flat).unwrap();
+    let mut seg = Segmentation2::new(view, SegmentParams::new(2)).unwrap();
+    let report = seg.run(|_| {});
+    let label = seg.label_image();
+    let present = |k: u8| label.iter().filter(|&&l| l == k).count();
+    assert!(
+        present(0) > 1000 && present(1) > 1000,
+        "a split, not one phase"
+    );
+    assert!(
+        report
+            .warnings
+            .iter()
+            .any(|w| w.contains("the same intensity away from their edges")),
+        "{:?}",
+        report.warnings
+    );
+
+    let two = Phantom2Kind::Disks(2).generate(256, 0.1, 3);
+    let view = ImageView::new_2d(two.width, two.height, &two.image).unwrap();
+    let report = Segmentation2::new(view, SegmentParams::new(2))
+        .unwrap()
+        .run(|_| {});
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+}
+
 /// `--phases auto` finds the number of phases of the disks phantoms.
 #[test]
 fn the_number_of_phases_is_chosen_from_the_data() {
