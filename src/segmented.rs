@@ -66,6 +66,9 @@ pub(crate) enum Render {
         complex: Box<Complex2>,
         /// The rank of each mesh label.
         order: Vec<u8>,
+        /// The header of a NIfTI slice: the labels are also written as
+        /// NIfTI with its geometry (`labels.nii.gz`).
+        nifti_header: Option<Vec<u8>>,
     },
     /// A volume.
     Volume {
@@ -217,7 +220,8 @@ impl Outputs {
 
     /// [`files`](Self::files) as a run on `input` writes them: a NIfTI
     /// volume's labels are `labels.nii.gz` instead of `labels.tif`, and a 2D
-    /// TIFF's labels come as `labels.tif` too.
+    /// TIFF's labels come as `labels.tif` too, a NIfTI slice's as
+    /// `labels.nii.gz`.
     pub fn files_for(&self, three_d: bool, input: &Path) -> Vec<&'static str> {
         let mut f = self.files(three_d);
         if three_d && crate::io::volume::is_nifti(input) {
@@ -228,6 +232,8 @@ impl Outputs {
             }
         } else if !three_d && self.labels && is_tiff(input) {
             f.insert(1, "labels.tif");
+        } else if !three_d && self.labels && crate::io::volume::is_nifti(input) {
+            f.insert(1, NIFTI_LABELS);
         }
         f
     }
@@ -270,8 +276,13 @@ impl Segmented {
                 values,
                 complex,
                 order,
+                nifti_header,
             } => {
                 self.write_2d(shown, &path, outputs)?;
+                if let (true, Some(header)) = (outputs.labels, nifti_header) {
+                    let phases = self.measurements.phases.len();
+                    save_labels_nifti(path(NIFTI_LABELS), header, &self.labels, phases)?;
+                }
                 if outputs.mesh {
                     complex.write_mesh_vtu(path("mesh.vtu"), order, frame)?;
                 }
@@ -347,6 +358,16 @@ impl Segmented {
         }
         if self.tiff_labels && outputs.labels {
             files.insert(1, "labels.tif");
+        }
+        if let (
+            Render::Image {
+                nifti_header: Some(_),
+                ..
+            },
+            true,
+        ) = (&self.render, outputs.labels)
+        {
+            files.insert(1, NIFTI_LABELS);
         }
         stage.publish(dir, &files)
     }

@@ -95,8 +95,16 @@ pub struct Image2 {
     sample_type: SampleType,
     colour: Colour,
     spacing: Option<[f64; 2]>,
-    placement: Option<Box<Frame>>,
+    placement: Option<Box<Placement>>,
     transparency: Transparency,
+}
+
+/// Where a NIfTI slice sits in the world, and its header, the template of
+/// its label map.
+#[derive(Clone, Debug, PartialEq)]
+struct Placement {
+    frame: Frame,
+    nifti_header: Option<Vec<u8>>,
 }
 
 /// The pixels of an image file with an alpha channel that are not fully
@@ -493,12 +501,22 @@ impl Image2 {
     /// it beyond the pixel size (a NIfTI slice's affine); `None`: the
     /// frame follows from the file's format (see `io::resolution`).
     pub fn placement(&self) -> Option<&Frame> {
-        self.placement.as_deref()
+        self.placement.as_deref().map(|p| &p.frame)
     }
 
-    /// The image placed in the world by `frame` (see [`Image2::placement`]).
-    pub fn with_placement(mut self, frame: Frame) -> Self {
-        self.placement = Some(Box::new(frame));
+    /// The header of the NIfTI file the image is the slice of: its label
+    /// map is written with it, so that it overlays the input.
+    pub fn nifti_header(&self) -> Option<&[u8]> {
+        self.placement.as_deref()?.nifti_header.as_deref()
+    }
+
+    /// The image placed in the world by `frame` (see [`Image2::placement`]),
+    /// the slice of the NIfTI file with `nifti_header`, if any.
+    pub fn with_placement(mut self, frame: Frame, nifti_header: Option<&[u8]>) -> Self {
+        self.placement = Some(Box::new(Placement {
+            frame,
+            nifti_header: nifti_header.map(<[u8]>::to_vec),
+        }));
         self
     }
 

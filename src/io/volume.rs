@@ -448,7 +448,7 @@ impl Volume {
         Some(
             Image2::from_raw(self.nx, self.ny, data)
                 .with_sample_type(t)
-                .with_placement(placement),
+                .with_placement(placement, self.nifti_header()),
         )
     }
 
@@ -946,7 +946,7 @@ fn nifti_affine(
 /// [`Volume::respaced`] does to the affine: `pixdim[1..=3]` (the qform's
 /// scale) and the sform's first three columns, so that a label map written
 /// from this header lines up with the respaced volume, not the file's grid.
-fn rescale_nifti_axes(header: &mut [u8], ratio: [f64; 3]) {
+pub(crate) fn rescale_nifti_axes(header: &mut [u8], ratio: [f64; 3]) {
     let le = i32::from_le_bytes(header[0..4].try_into().expect("4 bytes")) == NIFTI_HDR as i32;
     let mut scale = |o: usize, r: f64| {
         let bytes: [u8; 4] = header[o..o + 4].try_into().expect("4 bytes");

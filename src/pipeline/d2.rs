@@ -488,10 +488,22 @@ pub(crate) fn segment_image_then<T>(
             values: in_file_units(image),
             complex: Box::new(seg.complex().clone()),
             order,
+            nifti_header: label_header(image),
         },
         tiff_labels: matches!(&provenance.source, Source::File(path) if is_tiff(path)),
     };
     Ok((result, ready))
+}
+
+/// The header of a NIfTI slice's `labels.nii.gz`: the input's, its pixel
+/// size replaced by `--spacing` (as the frame's, so that both agree).
+fn label_header(image: &Image2) -> Option<Vec<u8>> {
+    let mut header = image.nifti_header()?.to_vec();
+    if let (Some([sx, sy]), Some(placed)) = (image.spacing(), image.placement()) {
+        let ratio = [sx / placed.spacing[0], sy / placed.spacing[1], 1.0];
+        crate::io::volume::rescale_nifti_axes(&mut header, ratio);
+    }
+    Some(header)
 }
 
 /// Writes phantom `name` (`NAME.png`, ground truth `NAME_gt.png` with phase

@@ -80,6 +80,19 @@ fn a_single_slice_nifti_is_a_2d_image() {
     assert_eq!(labels.dimensions(), (40, 30));
     assert_eq!(labels.get_pixel(20, 15)[0], 1);
     assert_eq!(labels.get_pixel(1, 1)[0], 0);
+    // labels.nii.gz: the same labels on the input's header (shape, affine).
+    let map = Volume::load(out.join("labels.nii.gz")).unwrap();
+    assert_eq!(map.dims(), [40, 30, 1]);
+    assert_eq!(
+        serde_json::json!(map.frame().index_to_world),
+        frame["index_to_world"]
+    );
+    let phases: Vec<u8> = map
+        .data()
+        .iter()
+        .map(|&v| (v * 255.0).round() as u8)
+        .collect();
+    assert_eq!(phases, labels.into_raw());
     // The disk's area, 7.5² π pixels, in mm² of the header's pixels.
     let area = report["phases"]["phases"][1]["count_measure"]
         .as_f64()
@@ -96,6 +109,13 @@ fn a_single_slice_nifti_is_a_2d_image() {
     let a = &report["frame"]["index_to_world"];
     assert_eq!(a[0], serde_json::json!([-1.0, 0.0, 0.0, 20.0]));
     assert_eq!(a[1][3], -3.0);
+    let map = Volume::load(out.join("labels.nii.gz")).unwrap();
+    assert_eq!(map.frame().index_to_world[0], [-1.0, 0.0, 0.0, 20.0]);
+    let [sx, sy, _] = map.spacing();
+    assert!(
+        (sx - 1.0).abs() < 1e-6 && (sy - 1.0).abs() < 1e-6,
+        "{sx} {sy}"
+    );
 
     let message = fails(&SEGMENT3D, &[input], &empty_out(&d), "dsc-seg segment`");
     assert!(
