@@ -312,7 +312,7 @@ pub struct Segment3dOptions {
     #[arg(long, value_name = "N")]
     pub refine_start: Option<usize>,
     /// Stop when the stopping rule is met, without the fine finish (the
-    /// interfaces refined to L/2 for 3 more iterations with two phases;
+    /// interfaces refined to L/2 for 2 more iterations with two phases;
     /// with more, a last flip round, then L/2 for 5 iterations), which
     /// makes data differing by a re-quantisation give the same labels
     #[arg(long)]

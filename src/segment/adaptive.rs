@@ -165,10 +165,14 @@ fn unit_factor() -> f64 {
 }
 
 impl Finish {
-    /// The 3D two-phase default: interfaces at `L/2` for 3 iterations. On
-    /// the 64³ two-phase phantoms the Dice against the truth changed by
-    /// −0.0004 to +0.0014, at 1.3–2.0× the CPU time (benches/RESULTS.md,
-    /// "Encoding stability, 3D").
+    /// The 3D two-phase default: interfaces at `L/2` for 2 iterations (the
+    /// first moves the surface at `L` and refines it, the second moves the
+    /// refined surface). Against 3 iterations, 2 save 8–10 % of a 64³ or
+    /// 128³ run's instructions and move the Dice against the truth by −0.0003
+    /// to +0.0004 on the 64³ and 128³ two-phase phantoms (−0.0006 on the
+    /// 48³ two balls); the 64-level re-encodings of the 48³ ones stay at
+    /// Dice 0.992–0.996 from the 8-bit runs (benches/RESULTS.md, "Speed,
+    /// 3D", "A shorter fine finish").
     /// Not for more phases: on the three- and four-phase phantoms, finer
     /// cells along the blurred edges between phases whose means are not
     /// adjacent let the interfaces between the intermediate phases fit
@@ -177,7 +181,7 @@ impl Finish {
     /// [`Finish::MULTIPHASE`].
     pub const TWO_PHASE: Finish = Finish {
         interface_fraction: 0.5,
-        iterations: 3,
+        iterations: 2,
         flip_round: false,
         rigidity_factor: 1.0,
     };
