@@ -5,6 +5,7 @@ use dsc_seg::dim::{Dim, D2};
 use dsc_seg::dsc::{Destinations, DscParams};
 use nalgebra::{Vector2, Vector3};
 use std::collections::HashSet;
+use std::path::Path;
 
 /// A `size`×`size` square at edge length `l` with the cells inside the given
 /// disks labelled 1, 2, … in order (later disks win).
@@ -122,4 +123,12 @@ pub fn quality_summary<K: Dim>(c: &Complex<K>) -> (f64, f64, f64, f64) {
     q.sort_by(f64::total_cmp);
     let low = q.iter().filter(|&&x| x < 0.3).count() as f64 / q.len() as f64;
     (q[0], q[q.len() / 20], q[q.len() / 2], low)
+}
+
+/// Writes a `size`×`size` float32 grayscale TIFF (Fiji's 32-bit type).
+pub fn save_f32_tiff(path: &Path, size: usize, data: &[f32]) {
+    tiff::encoder::TiffEncoder::new(std::fs::File::create(path).unwrap())
+        .unwrap()
+        .write_image::<tiff::encoder::colortype::Gray32Float>(size as u32, size as u32, data)
+        .unwrap();
 }

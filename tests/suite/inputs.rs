@@ -3,6 +3,7 @@
 //! refuses. Each gives a correct result or one error line naming its file.
 
 use crate::cli::{bin, empty_out, fails, tmp, SEGMENT, SEGMENT3D};
+use crate::common::save_f32_tiff;
 use dsc_seg::io::{save_nifti, FrameSource, Volume};
 use std::path::{Path, PathBuf};
 
@@ -254,10 +255,7 @@ fn init_labels_are_read_as_the_file_stores_them() {
 
     let float = d.path().join("labels.tif");
     let values: Vec<f32> = (0..32 * 32).map(|i| f32::from(half(i % 32))).collect();
-    tiff::encoder::TiffEncoder::new(std::fs::File::create(&float).unwrap())
-        .unwrap()
-        .write_image::<tiff::encoder::colortype::Gray32Float>(32, 32, &values)
-        .unwrap();
+    save_f32_tiff(&float, 32, &values);
     let float = float.to_str().unwrap();
     succeeds(
         &[
@@ -272,10 +270,7 @@ fn init_labels_are_read_as_the_file_stores_them() {
     );
     let fraction: Vec<f32> = values.iter().map(|v| v * 0.5).collect();
     let halves = d.path().join("halves.tif");
-    tiff::encoder::TiffEncoder::new(std::fs::File::create(&halves).unwrap())
-        .unwrap()
-        .write_image::<tiff::encoder::colortype::Gray32Float>(32, 32, &fraction)
-        .unwrap();
+    save_f32_tiff(&halves, 32, &fraction);
     fails(
         &SEGMENT,
         &[image, "--init-labels", halves.to_str().unwrap()],

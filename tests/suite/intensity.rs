@@ -6,6 +6,7 @@
 //! default settings (and on the uniform 3D mesh); a 16-bit volume's report
 //! gives its phase means in the file's units.
 
+use crate::common::save_f32_tiff;
 use dsc_seg::io::{Image2, SampleType};
 use dsc_seg::phantom::{junctions3d, shapes3d, Phantom2Kind, Phantom3};
 use dsc_seg::pipeline::mean_dice;
@@ -23,14 +24,6 @@ fn save_u16(path: &Path, size: usize, data: &[u16]) {
     image::ImageBuffer::<image::Luma<u16>, _>::from_raw(size as u32, size as u32, data.to_vec())
         .unwrap()
         .save(path)
-        .unwrap();
-}
-
-fn save_f32_tiff(path: &Path, size: usize, data: &[f32]) {
-    let file = std::fs::File::create(path).unwrap();
-    tiff::encoder::TiffEncoder::new(file)
-        .unwrap()
-        .write_image::<tiff::encoder::colortype::Gray32Float>(size as u32, size as u32, data)
         .unwrap();
 }
 

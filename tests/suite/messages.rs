@@ -4,6 +4,7 @@
 //! for options that do not parse or fit, 1 for a failed run).
 
 use crate::cli::{bin, tmp};
+use crate::common::save_f32_tiff;
 use std::path::Path;
 use std::process::Output;
 
@@ -83,10 +84,7 @@ fn a_2d_image_with_nan_names_the_file_and_the_count() {
     data[..128].fill(1.0);
     data[3] = f32::NAN;
     data[200] = f32::INFINITY;
-    tiff::encoder::TiffEncoder::new(std::fs::File::create(&path).unwrap())
-        .unwrap()
-        .write_image::<tiff::encoder::colortype::Gray32Float>(16, 16, &data)
-        .unwrap();
+    save_f32_tiff(&path, 16, &data);
     let o = run(&["segment", path.to_str().unwrap()], &d.path().join("o"));
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);

@@ -5,6 +5,7 @@
 //! labelled with the unit they are in.
 
 use crate::cli::{bin, tmp};
+use crate::common::save_f32_tiff;
 use serde_json::Value;
 use std::path::Path;
 
@@ -23,14 +24,6 @@ fn square(size: usize, outside: f64, inside: f64, texture: f64) -> Vec<f64> {
             level + texture * (((x * 7 + y * 13) % 5) as f64 - 2.0) / 2.0
         })
         .collect()
-}
-
-fn save_f32_tiff(path: &Path, size: usize, data: &[f64]) {
-    let data: Vec<f32> = data.iter().map(|&v| v as f32).collect();
-    tiff::encoder::TiffEncoder::new(std::fs::File::create(path).unwrap())
-        .unwrap()
-        .write_image::<tiff::encoder::colortype::Gray32Float>(size as u32, size as u32, &data)
-        .unwrap();
 }
 
 fn save_u16_png(path: &Path, size: usize, data: &[f64]) {
@@ -67,7 +60,11 @@ fn floats(v: &Value) -> Vec<f64> {
 fn a_float_tiff_reports_its_means_in_its_own_units_and_says_so() {
     let d = tmp();
     let path = d.path().join("f.tif");
-    save_f32_tiff(&path, 32, &square(32, 0.0, 1000.0, 20.0));
+    let data: Vec<f32> = square(32, 0.0, 1000.0, 20.0)
+        .iter()
+        .map(|&v| v as f32)
+        .collect();
+    save_f32_tiff(&path, 32, &data);
     let r = report(&["segment".as_ref(), path.as_os_str()], &d.path().join("o"));
     let input = &r["input"];
     assert_eq!(input["sample_type"], "float");
