@@ -27,7 +27,8 @@ use std::time::Instant;
 /// The file in `DIR/<stem>/` that says its outputs are complete, and made by what.
 pub const MARKER: &str = ".dsc-seg-complete.json";
 
-/// File extensions of the 2D images a folder is searched for.
+/// File extensions of the 2D images a folder is searched for, besides
+/// NIfTI files (`.nii`, `.nii.gz`; see [`folder_images`]).
 const IMAGE_EXTENSIONS: &[&str] = &[
     "png", "tif", "tiff", "jpg", "jpeg", "gif", "bmp", "pnm", "pgm", "ppm", "pbm",
 ];
@@ -238,7 +239,7 @@ fn listed_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
             // An empty batch would "succeed" with an empty summary.
             if images.is_empty() {
                 return Err(Error::Usage(format!(
-                    "folder {} holds no image ({})",
+                    "folder {} holds no image ({}, nii, nii.gz)",
                     p.display(),
                     IMAGE_EXTENSIONS.join(", ")
                 )));
@@ -249,12 +250,14 @@ fn listed_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
     Ok(inputs)
 }
 
-/// The image files of a folder ([`IMAGE_EXTENSIONS`]) in name order,
-/// hidden ones left out.
+/// The image files of a folder ([`IMAGE_EXTENSIONS`] and NIfTI files) in
+/// name order, hidden ones left out. A NIfTI one slice thick is a 2D image;
+/// one that is a volume is listed too, so that its row says to segment it
+/// with `segment3d` rather than the batch passing over it in silence.
 fn folder_images(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(sorted_entries(dir)?
         .into_iter()
-        .filter(|e| e.is_file() && has_extension(e, IMAGE_EXTENSIONS))
+        .filter(|e| e.is_file() && (has_extension(e, IMAGE_EXTENSIONS) || is_nifti(e)))
         .collect())
 }
 
