@@ -471,29 +471,60 @@ impl<K: Dim> Complex<K> {
     /// place (live entries keep their relative order, exactly as `compact`
     /// numbers them) and the maps are kept in [`Complex::last_cell_map`] and
     /// [`Complex::last_vertex_map`]. The deform loop calls this every iteration.
+    ///
+    /// The entries below the first dead vertex (cell) keep their index: an
+    /// iteration's edge flips replace a few cells and kill no vertex, so
+    /// usually no vertex moves and half of the cells stay where they are.
+    /// Those are not copied, and of their references only the ones past
+    /// the kept prefixes are looked up in the maps.
     pub fn compact_in_place(&mut self) {
         let mut vmap = std::mem::take(&mut self.book.last_vertex_map);
         let mut cmap = std::mem::take(&mut self.book.last_cell_map);
-        vmap.clear();
-        vmap.resize(self.positions.len(), None);
-        let mut n = 0u32;
-        for (i, slot) in vmap.iter_mut().enumerate() {
-            if self.vertex_cell[i].is_some() {
-                *slot = Some(VertexId(n));
-                n += 1;
-            }
-        }
-        cmap.clear();
-        cmap.resize(self.cells.len(), None);
-        let mut m = 0u32;
-        for (i, slot) in cmap.iter_mut().enumerate() {
-            if self.alive[i] {
-                *slot = Some(CellId(m));
-                m += 1;
+        let kept_vertices = self
+            .vertex_cell
+            .iter()
+            .position(Option::is_none)
+            .unwrap_or(self.vertex_cell.len());
+        let kept_cells = self
+            .alive
+            .iter()
+            .position(|&a| !a)
+            .unwrap_or(self.alive.len());
+        let vertices = (self.vertex_cell.len(), kept_vertices);
+        let n = renumber(&mut vmap, vertices, VertexId, |i| {
+            self.vertex_cell[i].is_some()
+        });
+        let cells = (self.alive.len(), kept_cells);
+        let m = renumber(&mut cmap, cells, CellId, |i| self.alive[i]);
+        let kept = (kept_vertices, kept_cells);
+        self.carry_vertices(&vmap, &cmap, kept, n as usize);
+        self.carry_cells(&vmap, &cmap, kept, m as usize);
+        self.book.last_vertex_map = vmap;
+        self.book.last_cell_map = cmap;
+        self.book.compactions += 1;
+    }
+
+    /// The vertex half of [`compact_in_place`](Self::compact_in_place): the
+    /// vertices from `kept.0` on move down to their new index, and every
+    /// vertex's cell is renumbered where it lies from `kept.1` on; `n`
+    /// vertices stay.
+    fn carry_vertices(
+        &mut self,
+        vmap: &[Option<VertexId>],
+        cmap: &[Option<CellId>],
+        (kept_vertices, kept_cells): (usize, usize),
+        n: usize,
+    ) {
+        // A kept vertex stays; its cell may have moved.
+        for cell in &mut self.vertex_cell[..kept_vertices] {
+            if let Some(c) = *cell {
+                if c.index() >= kept_cells {
+                    *cell = cmap[c.index()];
+                }
             }
         }
         // Forward copies: the new index never exceeds the old one.
-        for (i, new) in vmap.iter().enumerate() {
+        for (i, new) in vmap.iter().enumerate().skip(kept_vertices) {
             if let Some(new) = *new {
                 let k = new.index();
                 self.positions[k] = self.positions[i];
@@ -503,12 +534,42 @@ impl<K: Dim> Complex<K> {
                 self.vertex_cell[k] = self.vertex_cell[i].and_then(|c| cmap[c.index()]);
             }
         }
-        self.positions.truncate(n as usize);
-        self.book.moved_at.truncate(n as usize);
-        self.book.star_changed_at.truncate(n as usize);
-        self.classes.truncate(n as usize);
-        self.vertex_cell.truncate(n as usize);
-        for (i, new) in cmap.iter().enumerate() {
+        self.positions.truncate(n);
+        self.book.moved_at.truncate(n);
+        self.book.star_changed_at.truncate(n);
+        self.classes.truncate(n);
+        self.vertex_cell.truncate(n);
+    }
+
+    /// The cell half of [`compact_in_place`](Self::compact_in_place): a cell
+    /// below `kept.1` stays and has only its references past the kept
+    /// prefixes renumbered; the cells from `kept.1` on move down to their new
+    /// index; `m` cells stay.
+    fn carry_cells(
+        &mut self,
+        vmap: &[Option<VertexId>],
+        cmap: &[Option<CellId>],
+        (kept_vertices, kept_cells): (usize, usize),
+        m: usize,
+    ) {
+        let vertices_moved = kept_vertices < vmap.len();
+        for i in 0..kept_cells {
+            if vertices_moved {
+                for v in self.cells[i].as_mut() {
+                    if v.index() >= kept_vertices {
+                        *v = vmap[v.index()].expect("live cell references a live vertex");
+                    }
+                }
+            }
+            for nb in self.neighbours[i].as_mut() {
+                if let Some(c) = *nb {
+                    if c.index() >= kept_cells {
+                        *nb = cmap[c.index()];
+                    }
+                }
+            }
+        }
+        for (i, new) in cmap.iter().enumerate().skip(kept_cells) {
             if let Some(new) = *new {
                 let k = new.index();
                 let mut cell = self.cells[i];
@@ -524,14 +585,11 @@ impl<K: Dim> Complex<K> {
                 self.labels[k] = self.labels[i];
             }
         }
-        self.cells.truncate(m as usize);
-        self.neighbours.truncate(m as usize);
-        self.labels.truncate(m as usize);
-        self.alive.clear();
-        self.alive.resize(m as usize, true);
-        self.book.last_vertex_map = vmap;
-        self.book.last_cell_map = cmap;
-        self.book.compactions += 1;
+        self.cells.truncate(m);
+        self.neighbours.truncate(m);
+        self.labels.truncate(m);
+        self.alive.truncate(m);
+        self.alive[kept_cells.min(m)..].fill(true);
     }
 
     /// The old-to-new vertex map of the last [`Complex::compact`] (empty
@@ -560,11 +618,108 @@ impl<K: Dim> Complex<K> {
     }
 }
 
+/// Fills `map` with the old-to-new numbering (ids made by `id`) of `len`
+/// entries whose first `kept` are all live (they keep their index) and the
+/// rest live where `live` says; returns how many are live.
+fn renumber<Id>(
+    map: &mut Vec<Option<Id>>,
+    (len, kept): (usize, usize),
+    id: fn(u32) -> Id,
+    live: impl Fn(usize) -> bool,
+) -> u32 {
+    map.clear();
+    map.extend((0..kept as u32).map(|i| Some(id(i))));
+    let mut next = kept as u32;
+    map.extend((kept..len).map(|i| {
+        live(i).then(|| {
+            next += 1;
+            id(next - 1)
+        })
+    }));
+    next
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::dsc::{Destinations, DscParams};
     use nalgebra::Vector2;
+
+    /// What a compaction must give: the live vertices and cells renumbered
+    /// densely in their old order (a live entry's new id is its rank among
+    /// the live ones), each cell with its corners, label and neighbours
+    /// renumbered so. Checked on a mesh whose first dead vertex and cell lie
+    /// in its middle (a collapse there) and which grew at its end (a split),
+    /// and on one with no dead entry at all.
+    #[test]
+    fn compaction_renumbers_live_entries_by_rank() {
+        let mut c = Complex::<D2>::rectangle(40.0, 32.0, 4.0).unwrap();
+        c.label_by(|p| u32::from(p.x > 21.0));
+        let middle = c.cell_count() / 2;
+        let [u, v, ..] = *c.cell(CellId(middle as u32)) else {
+            unreachable!()
+        };
+        c.collapse_edge(u, v, crate::ops::CollapseMode::Unsafe, 0.0, 1.0)
+            .unwrap();
+        let last = CellId(c.cell_capacity() as u32 - 1);
+        let [a, b, ..] = *c.cell(last) else {
+            unreachable!()
+        };
+        c.split_edge(a, b).unwrap();
+        // (the test's premise: dead entries before the last live ones)
+        assert!(c.vertex_count() < c.vertex_capacity() && c.cell_count() < c.cell_capacity());
+        assert!(c.is_vertex_alive(VertexId(c.vertex_capacity() as u32 - 1)));
+        for round in ["dead entries in the middle", "no dead entry"] {
+            let rank = |alive: &dyn Fn(usize) -> bool, n: usize| {
+                let mut next = 0u32;
+                (0..n)
+                    .map(|i| {
+                        alive(i).then(|| {
+                            next += 1;
+                            next - 1
+                        })
+                    })
+                    .collect::<Vec<_>>()
+            };
+            let vrank = rank(
+                &|i| c.is_vertex_alive(VertexId(i as u32)),
+                c.vertex_capacity(),
+            );
+            let crank = rank(&|i| c.is_alive(CellId(i as u32)), c.cell_capacity());
+            let expected: Vec<_> = c
+                .cell_ids()
+                .map(|x| {
+                    let corners: Vec<u32> = c
+                        .cell(x)
+                        .iter()
+                        .map(|w| vrank[w.index()].unwrap())
+                        .collect();
+                    let neighbours: Vec<Option<u32>> = c
+                        .neighbours(x)
+                        .iter()
+                        .map(|nb| nb.map(|nb| crank[nb.index()].unwrap()))
+                        .collect();
+                    (corners, neighbours, c.label(x))
+                })
+                .collect();
+            let positions: Vec<_> = c.vertex_ids().map(|w| c.position(w)).collect();
+            c.compact_in_place();
+            let got: Vec<_> = c
+                .cell_ids()
+                .map(|x| {
+                    let corners: Vec<u32> = c.cell(x).iter().map(|w| w.0).collect();
+                    let neighbours: Vec<Option<u32>> =
+                        c.neighbours(x).iter().map(|nb| nb.map(|nb| nb.0)).collect();
+                    (corners, neighbours, c.label(x))
+                })
+                .collect();
+            assert_eq!(got, expected, "{round}");
+            assert_eq!(c.cell_capacity(), expected.len(), "{round}");
+            let moved: Vec<_> = c.vertex_ids().map(|w| c.position(w)).collect();
+            assert_eq!(moved, positions, "{round}");
+            assert!(c.validate().is_empty(), "{round}: {:?}", c.validate());
+        }
+    }
 
     /// The fan walk gives the breadth-first star cell for cell, in order, and
     /// the same number of phase pieces as the search, for every vertex
