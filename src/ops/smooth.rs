@@ -176,9 +176,6 @@ impl<K: Dim> Complex<K> {
                 pts
             })
         };
-        let before = at(p)
-            .map(|pts| K::quality_oriented(&pts[..K::NV]))
-            .fold(1.0, f64::min);
         let mut sum = K::Point::zero();
         let mut n = 0usize;
         for (pts, i) in star {
@@ -196,9 +193,14 @@ impl<K: Dim> Complex<K> {
         if (target - p).length() <= 1e-12 {
             return None;
         }
-        if !at(target).all(|pts| K::orient(&pts[..K::NV]) > 0.0)
-            || !at(target).all(|pts| K::quality_oriented_at_least(&pts[..K::NV], before))
-        {
+        if !at(target).all(|pts| K::orient(&pts[..K::NV]) > 0.0) {
+            return None;
+        }
+        // (the star's quality now, measured only for a move worth testing)
+        let before = at(p)
+            .map(|pts| K::quality_oriented(&pts[..K::NV]))
+            .fold(1.0, f64::min);
+        if !at(target).all(|pts| K::quality_oriented_at_least(&pts[..K::NV], before)) {
             return None;
         }
         Some(target)
