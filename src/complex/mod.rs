@@ -126,6 +126,15 @@ impl<K: Dim> Complex<K> {
             .map(CellId)
             .filter(|c| self.alive[c.index()])
     }
+    /// Per cell id, in order: the cell's label, `None` for a dead cell. Zipped
+    /// with a per-cell array, it sums over the live cells in one pass over
+    /// flat arrays, without an id lookup per cell.
+    pub fn label_slots(&self) -> impl Iterator<Item = Option<Label>> + '_ {
+        self.alive
+            .iter()
+            .zip(&self.labels)
+            .map(|(&alive, &label)| alive.then_some(label))
+    }
     /// Live vertex ids.
     pub fn vertex_ids(&self) -> impl Iterator<Item = VertexId> + '_ {
         (0..self.positions.len() as u32)

@@ -724,11 +724,13 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     }
 
     fn data_energy(&self) -> f64 {
+        debug_assert!(self.cells.len() >= self.complex.cell_capacity());
         self.complex
-            .cell_ids()
-            .map(|c| {
-                let m = self.phases.mean_of(self.complex.label(c)).unwrap_or(0.0);
-                self.cells[c.index()].sse(m)
+            .label_slots()
+            .zip(&self.cells)
+            .filter_map(|(label, st)| {
+                let m = self.phases.mean_of(label?).unwrap_or(0.0);
+                Some(st.sse(m))
             })
             .sum()
     }

@@ -563,12 +563,16 @@ impl PhaseStats {
     pub fn update<K: Raster>(&mut self, complex: &Complex<K>, cells: &[CellStats]) {
         self.count.iter_mut().for_each(|c| *c = 0);
         self.sum.iter_mut().for_each(|s| *s = 0.0);
-        for c in complex.cell_ids() {
-            let l = complex.label(c) as usize;
-            if l < self.count.len() {
-                self.count[l] += cells[c.index()].count as u64;
-                self.sum[l] += cells[c.index()].sum;
-            }
+        debug_assert!(
+            cells.len() >= complex.cell_capacity(),
+            "a statistic per cell id"
+        );
+        for (label, st) in complex.label_slots().zip(cells) {
+            let Some(l) = label.map(|l| l as usize).filter(|&l| l < self.count.len()) else {
+                continue;
+            };
+            self.count[l] += st.count as u64;
+            self.sum[l] += st.sum;
         }
         for k in 0..self.count.len() {
             if self.count[k] > 0 {
