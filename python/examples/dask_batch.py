@@ -1,8 +1,9 @@
 """Segment every image or volume of a folder on a Dask cluster.
 
 Each input (``.tif``/``.tiff`` image or stack, ``.png``, ``.npy``) is read,
-segmented with ``dsc_seg.segment`` and written to ``OUT/<stem>/`` by the
-worker that takes it; the client collects one row per input into
+segmented with ``dsc_seg.segment`` at the pixel/voxel size the file gives (as
+``dsc-seg`` reads it) and written to ``OUT/<stem>/`` by the worker that takes
+it; the client collects one row per input into
 ``OUT/summary.csv`` (the columns of ``dsc-seg segment``'s batch summary). A
 bad input fails its own row only.
 
@@ -33,18 +34,62 @@ COLUMNS = [
 ]
 
 
-def read_array(path: Path) -> np.ndarray:
-    """The samples of an image or volume file."""
+def read_input(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
+    """The samples of an image or volume file, and the ``spacing`` keyword
+    when the file gives a pixel/voxel size: without it a Fiji stack of
+    0.5 × 0.5 × 2.5 µm voxels would be segmented, and measured, as cubes."""
     suffix = path.suffix.lower()
     if suffix == ".npy":
-        return np.load(path)
+        return np.load(path), {}
     if suffix in (".tif", ".tiff"):
         import tifffile
 
-        return tifffile.imread(path)
-    from PIL import Image
+        with tifffile.TiffFile(path) as tif:
+            array = tif.asarray()
+            spacing = tiff_spacing(tif, array.ndim)
+    else:
+        from PIL import Image
 
-    return np.asarray(Image.open(path))
+        with Image.open(path) as image:
+            array = np.asarray(image)
+            dpi = image.info.get("dpi")
+        spacing = tuple(25.4 / d for d in dpi) if dpi and min(dpi) > 0 else None
+    if spacing is None or all(s == 1.0 for s in spacing):
+        return array, {}
+    return array, {"spacing": spacing}
+
+
+def tiff_spacing(tif, ndim: int) -> tuple[float, ...] | None:
+    """The pixel size (x, y), or voxel size (x, y, z), that ``dsc-seg``
+    reads from a TIFF: the resolution tags (pixels per inch or centimetre
+    give millimetres, pixels per unit Fiji/ImageJ's ``unit``) and ImageJ's
+    ``spacing`` for z (1 without it); None without resolution tags. The
+    length unit itself is not passed on: the outputs name it ``unit``."""
+    tags = tif.pages[0].tags
+
+    def step(name: str) -> float | None:
+        tag = tags.get(name)
+        if tag is None:
+            return None
+        pixels, length = tag.value
+        return length / pixels if pixels > 0 and length > 0 else None
+
+    x = step("XResolution")
+    if x is None:
+        return None
+    y = step("YResolution") or x
+    imagej = tif.imagej_metadata or {}
+    unit_tag = tags.get("ResolutionUnit")
+    unit = None if unit_tag is None else int(unit_tag.value)
+    if unit == 3:  # centimetre
+        scale = 10.0
+    elif unit == 1 or (unit is None and "unit" in imagej):  # none: ImageJ's unit
+        scale = 1.0
+    else:  # inch, TIFF's default
+        scale = 25.4
+    z = imagej.get("spacing")
+    z = z * scale if isinstance(z, (int, float)) and z > 0 else 1.0
+    return (x * scale, y * scale, z)[:ndim]
 
 
 def segment_file(
@@ -55,7 +100,9 @@ def segment_file(
     row = dict.fromkeys(COLUMNS, "")
     row.update(name=Path(path).stem, input=path)
     try:
-        result = dsc_seg.segment(read_array(Path(path)), phases=phases, **options)
+        array, geometry = read_input(Path(path))
+        # An option given, such as spacing, overrides the file's (as on the command line).
+        result = dsc_seg.segment(array, phases=phases, **{**geometry, **options})
         result.write(Path(out_dir) / row["name"], outputs=outputs)
         report = result.report
         row.update(

@@ -2,6 +2,7 @@
 as sequential runs, outputs per input, a bad input in its own row."""
 
 import csv
+import json
 import importlib.util
 from pathlib import Path
 
@@ -57,3 +58,42 @@ def test_dask_example_matches_sequential_runs(tmp_path):
         assert np.array_equal(labels, sequential.labels), name
         assert (out / name / "report.json").is_file()
         assert not (out / name / "mesh.vtu").exists()
+
+
+def test_a_stacks_voxel_size_is_read_as_the_cli_reads_it(tmp_path, cli):
+    """A Fiji stack of 0.5 × 0.5 × 2.5 µm voxels is segmented and measured in
+    those voxels, with the command line's labels, not as cubes."""
+    example = load_example()
+    volume, _ = dsc_seg.phantom("two_balls", size=20, noise=0.1, seed=1)
+    stack = tmp_path / "fiji.tif"
+    tifffile.imwrite(
+        stack,
+        volume,
+        imagej=True,
+        resolution=(2.0, 2.0),
+        metadata={"spacing": 2.5, "unit": "um", "axes": "ZYX"},
+    )
+    row = example.segment_file(
+        str(stack), str(tmp_path / "out"), 2, "labels,report", {"max_iterations": 15}
+    )
+    assert row["status"] == "done", row
+    report = json.loads((tmp_path / "out" / "fiji" / "report.json").read_text())
+    assert report["frame"]["spacing"] == [0.5, 0.5, 2.5]
+    cli("segment3d", stack, "--phases", 2, "--max-iterations", 15, "--outputs", "labels",
+        "--quiet", "--out", tmp_path / "cli")
+    assert np.array_equal(
+        tifffile.imread(tmp_path / "out" / "fiji" / "labels.tif"),
+        tifffile.imread(tmp_path / "cli" / "labels.tif"),
+    )
+
+
+def test_a_spacing_option_overrides_the_files(tmp_path):
+    example = load_example()
+    volume, _ = dsc_seg.phantom("two_balls", size=20, noise=0.1, seed=1)
+    stack = tmp_path / "fiji.tif"
+    tifffile.imwrite(stack, volume, imagej=True, resolution=(2.0, 2.0), metadata={"spacing": 2.5})
+    options = {"max_iterations": 15, "spacing": (1, 1, 1)}
+    row = example.segment_file(str(stack), str(tmp_path / "out"), 2, "report", options)
+    assert row["status"] == "done", row
+    report = json.loads((tmp_path / "out" / "fiji" / "report.json").read_text())
+    assert report["frame"]["spacing"] == [1.0, 1.0, 1.0]
