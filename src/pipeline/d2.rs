@@ -214,11 +214,10 @@ pub fn load_image_channel(
 fn load_nifti_slice(path: &Path, channel: Option<usize>) -> Result<Image2> {
     let volume = Volume::load_nifti(path)?;
     let Some(image) = volume.to_slice_image() else {
-        let [nx, ny, nz] = volume.dims();
         return Err(Error::Usage(format!(
-            "{} is a NIfTI volume of {nx}×{ny}×{nz} voxels: `segment` reads 2D images, \
-             segment it with `dsc-seg segment3d`",
-            path.display()
+            "{} is a NIfTI {}",
+            path.display(),
+            not_a_z_slice(volume.dims())
         )));
     };
     match channel {
@@ -230,6 +229,29 @@ fn load_nifti_slice(path: &Path, channel: Option<usize>) -> Result<Image2> {
             channels: 1,
         }
         .into()),
+    }
+}
+
+/// Why a NIfTI of `dims` voxels is not a slice `segment` reads: a volume,
+/// for `segment3d`; or a slice one voxel thick along x or y (sagittal,
+/// coronal), which `segment3d` cannot mesh either, so the way out is to
+/// make its thin axis the third.
+fn not_a_z_slice([nx, ny, nz]: [usize; 3]) -> String {
+    let thin_axis = match (nx, ny) {
+        (1, n) if n > 1 => Some(("x", "y z x")),
+        (n, 1) if n > 1 => Some(("y", "x z y")),
+        _ => None,
+    };
+    match thin_axis {
+        Some((axis, swap)) if nz > 1 => format!(
+            "slice of {nx}×{ny}×{nz} voxels, one voxel thick along {axis}: `segment` reads a \
+             slice one voxel thick along the third axis, `segment3d` a volume at least 2 \
+             voxels thick; make its thin axis the third (e.g. `fslswapdim IN {swap} OUT`)"
+        ),
+        _ => format!(
+            "volume of {nx}×{ny}×{nz} voxels: `segment` reads 2D images, \
+             segment it with `dsc-seg segment3d`"
+        ),
     }
 }
 

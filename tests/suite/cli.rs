@@ -718,6 +718,26 @@ fn a_nifti_given_to_segment_points_to_segment3d() {
     );
 }
 
+/// A sagittal slice (one voxel thick along x) is neither a slice `segment`
+/// reads nor a volume `segment3d` meshes: `segment` says how to make it one
+/// rather than pointing to `segment3d`, which refuses it as too thin.
+#[test]
+fn a_nifti_slice_thin_along_x_is_not_sent_to_segment3d() {
+    let d = tmp();
+    let p = d.path().join("sagittal.nii.gz");
+    let data: Vec<f32> = (0..8 * 8).map(|i| (i % 5) as f32).collect();
+    dsc_seg::io::save_nifti(&p, &dsc_seg::io::Volume::from_raw(1, 8, 8, data)).unwrap();
+    let message = fails(
+        &SEGMENT,
+        &[p.to_str().unwrap()],
+        &empty_out(&d),
+        "thin axis the third",
+    );
+    assert!(message.contains("one voxel thick along x"), "{message}");
+    assert!(message.contains("fslswapdim IN y z x OUT"), "{message}");
+    assert!(!message.contains("segment it with"), "{message}");
+}
+
 /// A two-channel, two-slice ImageJ hyperstack is four pages, but not a
 /// volume: both commands refuse it, naming its extents, rather than pointing
 /// `segment`'s user to `segment3d` (which would take the channels for slices).
