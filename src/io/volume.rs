@@ -39,7 +39,7 @@ use super::atomic::{write_atomic, write_bytes_atomic};
 use super::error::{io_reason, IoError, Result};
 use super::frame::{Affine, Frame, FrameSource};
 use super::hyperstack::Hyperstack;
-use super::image2::{lerp_nodes, Image2, SampleType};
+use super::image2::{lerp_nodes, Colour, Image2, SampleType};
 use super::intensity::IntensityMap;
 use super::resolution::{tiff_resolution, Resolution};
 
@@ -332,7 +332,9 @@ impl Volume {
     /// Loads a directory of 2D slices (any format [`Image2::load`] reads),
     /// sorted in natural filename order (`s2.png` before `s10.png`); hidden
     /// files and files with non-image extensions are skipped. All slices must
-    /// have the same size.
+    /// have the same size and sample type, and be gray: a colour slice is
+    /// refused, as a colour page of a TIFF stack is, since a volume has no
+    /// channel to choose and its luminance can invert the contrast sought.
     pub fn load_slices(dir: impl AsRef<Path>) -> Result<Self> {
         const EXTS: &[&str] = &[
             "png", "jpg", "jpeg", "tif", "tiff", "gif", "bmp", "pgm", "ppm", "pnm", "pbm", "pam",
@@ -362,6 +364,14 @@ impl Volume {
         let mut sample_type = SampleType::Float;
         for (z, f) in files.iter().enumerate() {
             let im = Image2::load(f)?;
+            if im.colour() != Colour::Gray {
+                return Err(IoError::Unsupported {
+                    path: f.clone(),
+                    reason: "the slice is in colour; the slices of a volume must be grayscale: \
+                             save them as gray images or as one channel of each"
+                        .into(),
+                });
+            }
             if z == 0 {
                 (nx, ny) = im.dims();
                 sample_type = im.sample_type();

@@ -457,3 +457,48 @@ fn bad_slice_folders() {
         "s2.png is not a readable image",
     );
 }
+
+/// A folder of colour slices is refused, as a TIFF stack of colour pages
+/// is: its luminance would be segmented with nothing saying so (and here
+/// the red ball is darker than its surroundings in luminance), while
+/// slices of gray stored as RGB are gray.
+#[test]
+fn colour_slices_are_refused_and_gray_rgb_slices_read() {
+    let d = tmp();
+    let out = empty_out(&d);
+    let folder = |name: &str, colour: fn(u8) -> [u8; 3]| {
+        let dir = d.path().join(name);
+        std::fs::create_dir(&dir).unwrap();
+        for z in 0..6u32 {
+            image::RgbImage::from_fn(12, 12, |x, y| {
+                let inside =
+                    (x as i32 - 6).pow(2) + (y as i32 - 6).pow(2) + (z as i32 - 3).pow(2) < 9;
+                image::Rgb(colour(if inside {
+                    200
+                } else {
+                    40 + ((x * 7 + y * 3 + z) % 11) as u8
+                }))
+            })
+            .save(dir.join(format!("s{z}.png")))
+            .unwrap();
+        }
+        dir
+    };
+    let red = folder("red_ball", |v| [v, 255 - v, 30]);
+    let line = fails(&SEGMENT3D, &[red.to_str().unwrap()], &out, "in colour");
+    assert!(line.contains("s0.png"), "{line}");
+    let gray = folder("gray_as_rgb", |v| [v, v, v]);
+    let o = bin()
+        .args([
+            "segment3d",
+            gray.to_str().unwrap(),
+            "--outputs",
+            "report",
+            "--quiet",
+        ])
+        .arg("--out")
+        .arg(d.path().join("gray_out"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
