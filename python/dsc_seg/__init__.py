@@ -152,7 +152,7 @@ def segment(image: Any, phases: Union[int, str] = 2, **options: Any) -> Segmenta
     Any integer or floating-point dtype is accepted (float16 as float32),
     with the intensities the file readers would give: uint8 divided by 255,
     uint16 by 65535, every other type as it is in 2D and mapped by its own
-    range to [0, 1] in 3D. A colour image (rows × columns × 3 or 4
+    range to [0, 1] in 3D. A colour image (rows × columns × 2 to 4
     channels) is refused: pass one channel or its luminance. So is a 2D array
     of 32/64-bit values that float32 would round by more than a thousandth
     of their range (values far from zero that vary little): subtract an
@@ -194,9 +194,10 @@ def _checked_array(image: Any) -> np.ndarray:
     volume or with its mask ignored.
 
     A colour image as NumPy and image libraries hold it (rows × columns ×
-    3 or 4 channels) has the shape of a volume of as many slices as rows,
-    3 or 4 voxels wide: segmented as one, it gives labels of the right
-    shape and a plausible look, but mixes the channels along a spatial axis.
+    3 or 4 channels, or 2 for gray + alpha) has the shape of a volume of as
+    many slices as rows, 2 to 4 voxels wide: segmented as one, it gives
+    labels of the right shape and a plausible look, but mixes the channels
+    along a spatial axis.
     """
     if isinstance(image, (str, bytes, PathLike)):
         raise ValueError(
@@ -213,12 +214,12 @@ def _checked_array(image: Any) -> np.ndarray:
     array = np.asarray(image)
     if not array.dtype.isnative:
         array = array.astype(array.dtype.newbyteorder("="))
-    if array.ndim == 3 and array.shape[2] in (3, 4) and min(array.shape[:2]) > 4:
+    if array.ndim == 3 and array.shape[2] in (2, 3, 4) and min(array.shape[:2]) > 4:
         raise ValueError(
             f"the array's shape {array.shape} is that of a colour image "
             f"(rows × columns × {array.shape[2]} channels), not of a volume "
             "(slices × rows × columns): pass one channel (image[..., 0]) or "
-            "the luminance as a 2D array; a volume only 3 or 4 voxels wide "
+            "the luminance as a 2D array; a volume only 2 to 4 voxels wide "
             "along its last axis is taken with that axis moved first "
             "(np.moveaxis(volume, 2, 0))"
         )

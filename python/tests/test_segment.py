@@ -208,7 +208,7 @@ def test_a_masked_array_or_a_file_name_is_refused_not_misread():
 
 def test_a_colour_image_is_refused_not_segmented_as_a_volume():
     image, _ = dsc_seg.phantom("two_phase", size=32)
-    for channels in (3, 4):
+    for channels in (2, 3, 4):  # gray + alpha, RGB, RGBA
         colour = np.repeat(image[:, :, None], channels, axis=2)
         with pytest.raises(ValueError, match="colour image"):
             dsc_seg.segment(colour)
