@@ -51,12 +51,25 @@ def read_input(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
         from PIL import Image
 
         with Image.open(path) as image:
-            array = np.asarray(image)
+            # A palette image's samples are indices into its palette, not intensities.
+            array = np.asarray(image.convert("RGBA") if image.mode in ("P", "PA") else image)
             dpi = image.info.get("dpi")
+        array = gray_if_gray(array)
         spacing = tuple(25.4 / d for d in dpi) if dpi and min(dpi) > 0 else None
     if spacing is None or all(s == 1.0 for s in spacing):
         return array, {}
     return array, {"spacing": spacing}
+
+
+def gray_if_gray(array: np.ndarray) -> np.ndarray:
+    """A picture's gray values where its colour channels are equal (gray
+    with an alpha channel, or a palette of grays), its alpha left out, as
+    ``dsc-seg segment`` reads it; other colour pictures as they are, which
+    ``dsc_seg.segment`` refuses (pass one channel or the luminance)."""
+    if array.ndim != 3:
+        return array
+    colour = array[..., :3] if array.shape[2] >= 3 else array[..., :1]
+    return colour[..., 0] if (colour == colour[..., :1]).all() else array
 
 
 def tiff_spacing(tif, ndim: int) -> tuple[float, ...] | None:

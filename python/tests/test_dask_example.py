@@ -97,3 +97,26 @@ def test_a_spacing_option_overrides_the_files(tmp_path):
     assert row["status"] == "done", row
     report = json.loads((tmp_path / "out" / "fiji" / "report.json").read_text())
     assert report["frame"]["spacing"] == [1.0, 1.0, 1.0]
+
+
+def test_a_palette_or_gray_alpha_png_is_read_as_its_gray_values(tmp_path, cli):
+    """A PNG of gray values saved with a palette (a quantiser's, its entries
+    in any order) or with an alpha channel gives the command line's labels,
+    not those of its palette indices or of a volume two voxels wide."""
+    from PIL import Image
+
+    example = load_example()
+    image, _ = dsc_seg.phantom("two_phase", size=48, noise=0.1, seed=1)
+    order = np.random.default_rng(1).permutation(256)  # palette entry of each gray
+    palette = Image.fromarray(order[image].astype(np.uint8), "P")
+    palette.putpalette(np.repeat(np.argsort(order), 3).astype(np.uint8).tobytes())
+    alpha = Image.fromarray(np.stack([image, np.full_like(image, 255)], axis=2), "LA")
+    for name, picture in (("palette", palette), ("alpha", alpha)):
+        path = tmp_path / f"{name}.png"
+        picture.save(path)
+        row = example.segment_file(str(path), str(tmp_path / "out"), 2, "labels", {})
+        assert row["status"] == "done", row
+        cli("segment", path, "--outputs", "labels", "--quiet", "--out", tmp_path / name)
+        expected = np.asarray(Image.open(tmp_path / name / "labels.png"))
+        labels = np.asarray(Image.open(tmp_path / "out" / name / "labels.png"))
+        assert np.array_equal(labels, expected), name
