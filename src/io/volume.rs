@@ -254,6 +254,16 @@ impl Volume {
                 });
             }
             match dec.colortype().map_err(bad)? {
+                // Packed bits, eight pixels to a byte: a bilevel mask.
+                tiff::ColorType::Gray(bits) if bits < 8 => {
+                    return Err(IoError::Unsupported {
+                        path: path.to_path_buf(),
+                        reason: format!(
+                            "page {nz} has {bits}-bit samples (a bilevel image); \
+                             save the stack with 8-bit samples"
+                        ),
+                    })
+                }
                 tiff::ColorType::Gray(_) => {}
                 other => {
                     return Err(IoError::Unsupported {

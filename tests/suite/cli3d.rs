@@ -205,6 +205,63 @@ fn too_small_volumes() {
     fails(&SEGMENT3D, &[p.to_str().unwrap()], &out, "1×1×1 voxels");
 }
 
+/// A stack of 1-bit pages (what tifffile writes for a boolean mask) is
+/// refused by its bit depth, not called malformed.
+#[test]
+fn a_stack_of_one_bit_pages_is_refused_by_its_bit_depth() {
+    let d = tmp();
+    let p = d.path().join("mask.tif");
+    std::fs::write(&p, one_bit_tiff(16, 3)).unwrap();
+    let line = fails(
+        &SEGMENT3D,
+        &[p.to_str().unwrap()],
+        &empty_out(&d),
+        "1-bit samples",
+    );
+    assert!(!line.contains("malformed"), "{line}");
+}
+
+/// A little-endian TIFF of `pages` pages of `side`² pixels, 1 bit each
+/// (black is zero), uncompressed, one strip a page, in stripes.
+fn one_bit_tiff(side: u32, pages: u32) -> Vec<u8> {
+    let row_bytes = side.div_ceil(8);
+    let strip = vec![0b1010_1010u8; (row_bytes * side) as usize];
+    let ifd_len = 2 + 9 * 12 + 4;
+    let page_len = strip.len() as u32 + ifd_len;
+    let mut b = b"II*\0".to_vec();
+    // Each page's strip comes first, its IFD after it.
+    b.extend((8 + strip.len() as u32).to_le_bytes());
+    for k in 0..pages {
+        let start = 8 + k * page_len;
+        b.extend(&strip);
+        let next = if k + 1 < pages {
+            start + page_len + strip.len() as u32
+        } else {
+            0
+        };
+        let entries: [(u16, u16, u32); 9] = [
+            (256, 4, side),               // ImageWidth
+            (257, 4, side),               // ImageLength
+            (258, 3, 1),                  // BitsPerSample
+            (259, 3, 1),                  // Compression: none
+            (262, 3, 1),                  // PhotometricInterpretation: black is zero
+            (273, 4, start),              // StripOffsets
+            (277, 3, 1),                  // SamplesPerPixel
+            (278, 4, side),               // RowsPerStrip
+            (279, 4, strip.len() as u32), // StripByteCounts
+        ];
+        b.extend(9u16.to_le_bytes());
+        for (tag, kind, value) in entries {
+            b.extend(tag.to_le_bytes());
+            b.extend(kind.to_le_bytes());
+            b.extend(1u32.to_le_bytes());
+            b.extend(value.to_le_bytes()); // a SHORT sits in the low bytes
+        }
+        b.extend(next.to_le_bytes());
+    }
+    b
+}
+
 #[test]
 fn constant_volumes() {
     let d = tmp();
