@@ -20,6 +20,12 @@ pub(super) struct Bookkeeping {
     pub(super) last_cell_map: Vec<Option<CellId>>,
     /// The old-to-new vertex map of the last compaction.
     pub(super) last_vertex_map: Vec<Option<VertexId>>,
+    /// Whether the last compaction also renumbered spatially (its maps are
+    /// then a permutation, not order-keeping).
+    pub(super) last_compaction_reordered: bool,
+    /// How many of the first cells lie in the order of the last spatial
+    /// renumbering (the rest were appended since).
+    pub(super) ordered_cells: usize,
     /// Per vertex: the value of `move_clock` when it was created or last moved.
     pub(super) moved_at: Vec<u64>,
     /// Per vertex: the value of `move_clock` when its star last changed (a
@@ -66,6 +72,8 @@ impl Clone for Bookkeeping {
             compactions: self.compactions,
             last_cell_map: self.last_cell_map.clone(),
             last_vertex_map: self.last_vertex_map.clone(),
+            last_compaction_reordered: self.last_compaction_reordered,
+            ordered_cells: self.ordered_cells,
             moved_at: self.moved_at.clone(),
             star_changed_at: self.star_changed_at.clone(),
             move_clock: self.move_clock,

@@ -126,6 +126,8 @@ impl<K: Dim> Complex<K> {
             domain_max: max,
             book: Bookkeeping::new(n_points),
         };
+        // Built meshes come in grid (or TetGen's) order, local enough.
+        complex.book.ordered_cells = n_cells;
         complex.reclassify_all();
         Ok(complex)
     }

@@ -15,6 +15,7 @@ mod export;
 mod interface;
 mod junction;
 mod measure;
+mod reorder;
 mod seen;
 mod stretch;
 #[cfg(feature = "tetgen")]
@@ -476,10 +477,15 @@ impl<K: Dim> Complex<K> {
         )
     }
 
-    /// [`Complex::compact`] without allocating: the arrays are compacted in
-    /// place (live entries keep their relative order, exactly as `compact`
-    /// numbers them) and the maps are kept in [`Complex::last_cell_map`] and
-    /// [`Complex::last_vertex_map`]. The deform loop calls this every iteration.
+    /// [`Complex::compact`] without allocating (but when it renumbers
+    /// spatially): the arrays are compacted in place (live entries keep
+    /// their relative order, exactly as `compact` numbers them) and the maps
+    /// are kept in [`Complex::last_cell_map`] and [`Complex::last_vertex_map`].
+    /// The deform loop calls this every iteration. In 3D, once a quarter of
+    /// the cells were appended since the last time, it also renumbers both
+    /// in spatial order (`reorder.rs`; see
+    /// [`Complex::last_compaction_reordered`]), and the maps compose both
+    /// steps.
     ///
     /// The entries below the first dead vertex (cell) keep their index: an
     /// iteration's edge flips replace a few cells and kill no vertex, so
@@ -503,6 +509,10 @@ impl<K: Dim> Complex<K> {
         let n = renumber(&mut vmap, vertices, VertexId, |i| {
             self.vertex_cell[i].is_some()
         });
+        let ordered = self.alive[..self.book.ordered_cells.min(self.alive.len())]
+            .iter()
+            .filter(|&&a| a)
+            .count();
         let cells = (self.alive.len(), kept_cells);
         let m = renumber(&mut cmap, cells, CellId, |i| self.alive[i]);
         let kept = (kept_vertices, kept_cells);
@@ -511,6 +521,19 @@ impl<K: Dim> Complex<K> {
         self.book.last_vertex_map = vmap;
         self.book.last_cell_map = cmap;
         self.book.compactions += 1;
+        self.book.ordered_cells = ordered;
+        self.book.last_compaction_reordered = self.reorder_due(ordered, m as usize);
+        if self.book.last_compaction_reordered {
+            self.reorder_spatially();
+            self.book.ordered_cells = m as usize;
+        }
+    }
+
+    /// Whether the last compaction renumbered spatially as well: its maps
+    /// then permute the ids instead of keeping their order, and a per-cell
+    /// or per-vertex record cannot follow them by forward copies in place.
+    pub fn last_compaction_reordered(&self) -> bool {
+        self.book.last_compaction_reordered
     }
 
     /// The vertex half of [`compact_in_place`](Self::compact_in_place): the

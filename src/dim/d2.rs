@@ -30,6 +30,7 @@ impl Dim for D2 {
     const SAMPLES: &'static str = "pixels";
     const SMALLEST_GRID: &'static str = "2×2";
     const SPLITS_UNCOLLAPSIBLE: bool = false;
+    const REORDERS_SPATIALLY: bool = false;
     type Point = Vector2<f64>;
     type Cell = [VertexId; 3];
     type Neighbours = [Option<CellId>; 3];

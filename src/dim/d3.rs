@@ -21,6 +21,7 @@ impl Dim for D3 {
     const SAMPLES: &'static str = "voxels";
     const SMALLEST_GRID: &'static str = "2×2×2";
     const SPLITS_UNCOLLAPSIBLE: bool = true;
+    const REORDERS_SPATIALLY: bool = true;
     type Point = Vector3<f64>;
     type Cell = [VertexId; 4];
     type Neighbours = [Option<CellId>; 4];

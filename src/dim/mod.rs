@@ -56,6 +56,10 @@ pub trait Dim: sealed::Sealed + Copy + Clone + Debug + Default + Send + Sync + '
     /// longest edge (3D, where slivers whose every collapse would invert a
     /// neighbour are common); in 2D such a triangle is left as it is.
     const SPLITS_UNCOLLAPSIBLE: bool;
+    /// Whether compaction renumbers the mesh in spatial order once enough
+    /// cells were appended out of it (3D, whose mesh arrays outgrow the
+    /// caches; a 2D mesh fits in them and keeps its order).
+    const REORDERS_SPATIALLY: bool;
     /// A point or vector of the space.
     type Point: Point;
     /// The `N + 1` vertices of a cell, positively oriented.

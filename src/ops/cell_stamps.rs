@@ -74,16 +74,27 @@ impl<T: Copy> CellStamps<T> {
             self.about = None;
             return;
         }
-        // New ids are dense and in the old ids' order, never above them:
-        // forward copies are safe, and the first `live` entries are written.
         let map = &complex.last_cell_map()[..self.stamps.len().min(complex.last_cell_map().len())];
-        for (old, new) in map.iter().enumerate() {
-            if let Some(new) = new {
-                self.stamps[new.index()] = self.stamps[old];
+        if complex.last_compaction_reordered() {
+            // A permutation: the stamps move into a fresh array.
+            let mut moved = vec![None; complex.cell_count()];
+            for (old, new) in map.iter().enumerate() {
+                if let Some(new) = new {
+                    moved[new.index()] = self.stamps[old];
+                }
             }
+            self.stamps = moved;
+        } else {
+            // New ids are dense and in the old ids' order, never above them:
+            // forward copies are safe, and the first `live` entries are written.
+            for (old, new) in map.iter().enumerate() {
+                if let Some(new) = new {
+                    self.stamps[new.index()] = self.stamps[old];
+                }
+            }
+            let live = map.iter().flatten().count();
+            self.stamps.truncate(live);
         }
-        let live = map.iter().flatten().count();
-        self.stamps.truncate(live);
         self.about = Some((complex.identity(), complex.compactions()));
     }
 }

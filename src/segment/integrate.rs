@@ -140,7 +140,12 @@ impl<K: Raster> CellCache<K> {
         image: &ImageView<'_>,
         out: &mut Vec<CellStats>,
     ) -> usize {
-        if helper.is_threaded() || complex.cell_capacity() >= 8 * PARALLEL_BATCH {
+        // A spatial renumbering permutes the ids: the entries cannot follow
+        // it by forward moves in place.
+        if helper.is_threaded()
+            || complex.cell_capacity() >= 8 * PARALLEL_BATCH
+            || complex.last_compaction_reordered()
+        {
             self.integrate_double_buffered(helper, complex, image, out)
         } else {
             self.integrate_in_place(complex, image, out)
@@ -704,5 +709,51 @@ mod tests {
             assert_eq!(cached[0], full, "round {round}");
             assert!(n > 0 && n < mesh.cell_count(), "round {round}: {n}");
         }
+    }
+
+    /// In 3D the compactions sometimes renumber spatially (a permutation,
+    /// not an order-keeping map): the cache on one thread and the one
+    /// shared with a helper still give the full integration's statistics.
+    #[test]
+    fn cached_integration_follows_spatial_renumbering() {
+        use crate::dim::D3;
+        use nalgebra::Vector3;
+        let dims = [30usize, 27, 24];
+        let data = scrambled(dims[0] * dims[1], dims[2], 7919, 1013);
+        let image = ImageView::new_3d(dims, &data).unwrap();
+        let l = 3.0;
+        let size = dims.map(|d| d as f64);
+        let mut mesh = Complex::<D3>::cuboid(size, l).unwrap();
+        let params = DscParams::new::<D3>(l);
+        let mut caches = [(); 2].map(|_| CellCache::<D3>::new());
+        let helpers = [SpinHelper::none(), SpinHelper::with_thread().unwrap()];
+        let mut cached = [Vec::new(), Vec::new()];
+        let mut full = Vec::new();
+        let mut reordered = [0, 0];
+        let centre = Vector3::new(15.0, 13.5, 12.0);
+        for round in 0..10 {
+            if round > 0 {
+                let mut dest = Destinations::new(&mesh);
+                for v in mesh.vertex_ids().collect::<Vec<_>>() {
+                    let p = mesh.position(v);
+                    let d = p - centre;
+                    if d.norm() < 4.0 + 1.5 * round as f64 {
+                        dest.set(v, mesh.constrain(v, p + d * 0.3));
+                    }
+                }
+                mesh.deform(&dest, &params);
+                reordered[usize::from(mesh.last_compaction_reordered())] += 1;
+            }
+            for (cache, (helper, out)) in caches.iter_mut().zip(helpers.iter().zip(&mut cached)) {
+                cache.integrate_on(helper, &mesh, &image, out);
+            }
+            integrate_cells(&mesh, &image, &mut full);
+            assert_eq!(cached[0], full, "round {round}");
+            assert_eq!(cached[1], full, "round {round}");
+        }
+        assert!(
+            reordered[0] > 0 && reordered[1] > 0,
+            "compactions kept the order / renumbered: {reordered:?}"
+        );
     }
 }
