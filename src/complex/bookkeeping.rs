@@ -26,6 +26,9 @@ pub(super) struct Bookkeeping {
     /// How many of the first cells lie in the order of the last spatial
     /// renumbering (the rest were appended since).
     pub(super) ordered_cells: usize,
+    /// Whether spatial renumbering is held off for now
+    /// ([`Complex::hold_spatial_renumbering`](super::Complex::hold_spatial_renumbering)).
+    pub(super) renumbering_held: bool,
     /// Per vertex: the value of `move_clock` when it was created or last moved.
     pub(super) moved_at: Vec<u64>,
     /// Per vertex: the value of `move_clock` when its star last changed (a
@@ -74,6 +77,7 @@ impl Clone for Bookkeeping {
             last_vertex_map: self.last_vertex_map.clone(),
             last_compaction_reordered: self.last_compaction_reordered,
             ordered_cells: self.ordered_cells,
+            renumbering_held: self.renumbering_held,
             moved_at: self.moved_at.clone(),
             star_changed_at: self.star_changed_at.clone(),
             move_clock: self.move_clock,

@@ -28,7 +28,19 @@ impl<K: Dim> Complex<K> {
     /// dimensions that do, once the cells appended out of order (`live`
     /// cells, of which the first `ordered` are in order) exceed the share.
     pub(super) fn reorder_due(&self, ordered: usize, live: usize) -> bool {
-        K::REORDERS_SPATIALLY && (live - ordered) * REORDER_SHARE > live
+        K::REORDERS_SPATIALLY
+            && !self.book.renumbering_held
+            && (live - ordered) * REORDER_SHARE > live
+    }
+
+    /// Holds the spatial renumbering off (`held`) or lets it happen again.
+    /// A sweep that relabels cells one after the other in id order (the
+    /// guarded label flips) decides differently when the ids follow space:
+    /// on a coarse start refined in passes, each relabelled by such a sweep,
+    /// the spatial order chained the flips and the start began further from
+    /// the answer, so the refined start holds it off until it is done.
+    pub fn hold_spatial_renumbering(&mut self, held: bool) {
+        self.book.renumbering_held = held;
     }
 
     /// Renumbers the (compacted) vertices in Z-order of their positions and

@@ -563,6 +563,15 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// (this pass does not count against `flip_once`). Ends early after a
     /// pass that grows the mesh by less than a tenth.
     fn refine_start(&mut self, passes: usize) {
+        // (the passes' flip sweeps judge the refined cells in creation
+        // order: `Complex::hold_spatial_renumbering`)
+        self.complex.hold_spatial_renumbering(true);
+        self.refine_start_passes(passes);
+        self.complex.hold_spatial_renumbering(false);
+    }
+
+    /// The passes of [`refine_start`](Self::refine_start).
+    fn refine_start_passes(&mut self, passes: usize) {
         for _ in 0..passes {
             let before = self.complex.cell_count();
             self.update_sizing();
