@@ -12,6 +12,7 @@
 //!   `summary-I-of-N.csv`.
 
 use crate::error::{Error, Result};
+use crate::io::volume::{is_nifti, nifti_is_volume};
 use crate::io::write_bytes_atomic;
 use crate::pipeline::{Job, Segment3dJob, SegmentJob, Source};
 use crate::segment::SegmentParams;
@@ -250,15 +251,35 @@ fn listed_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
     Ok(inputs)
 }
 
-/// The image files of a folder ([`IMAGE_EXTENSIONS`] and NIfTI files) in
-/// name order, hidden ones left out. A NIfTI one slice thick is a 2D image;
-/// one that is a volume is listed too, so that its row says to segment it
-/// with `segment3d` rather than the batch passing over it in silence.
+/// The image files of a folder ([`IMAGE_EXTENSIONS`] and NIfTI slices) in
+/// name order, hidden ones left out. A NIfTI whose header says it is a
+/// volume is left to `segment3d` ([`nifti_volumes_left_out`] names them);
+/// one whose header cannot be read is listed, so that its row says why.
 fn folder_images(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(sorted_entries(dir)?
         .into_iter()
-        .filter(|e| e.is_file() && (has_extension(e, IMAGE_EXTENSIONS) || is_nifti(e)))
+        .filter(|e| e.is_file())
+        .filter(|e| has_extension(e, IMAGE_EXTENSIONS) || is_nifti_slice(e))
         .collect())
+}
+
+/// Whether `path` is a NIfTI file not known to be a volume.
+fn is_nifti_slice(path: &Path) -> bool {
+    is_nifti(path) && nifti_is_volume(path) != Some(true)
+}
+
+/// The NIfTI volumes in the 2D batch folders among `paths`: `segment`
+/// leaves them out of the folder's images, and the command line says so.
+pub fn nifti_volumes_left_out(paths: &[PathBuf], three_d: bool) -> Vec<PathBuf> {
+    if three_d {
+        return Vec::new();
+    }
+    paths
+        .iter()
+        .filter(|p| is_batch_folder(p, false))
+        .flat_map(|p| sorted_entries(p).unwrap_or_default())
+        .filter(|e| e.is_file() && is_nifti(e) && nifti_is_volume(e) == Some(true))
+        .collect()
 }
 
 /// A folder's entries in name order, hidden ones left out.
@@ -280,13 +301,6 @@ fn has_extension(path: &Path, extensions: &[&str]) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| extensions.contains(&e.to_ascii_lowercase().as_str()))
-}
-
-fn is_nifti(path: &Path) -> bool {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_ascii_lowercase());
-    name.is_some_and(|n| n.ends_with(".nii") || n.ends_with(".nii.gz"))
 }
 
 /// The volumes of a folder of volumes: its NIfTI files, TIFF files and

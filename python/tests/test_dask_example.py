@@ -2,8 +2,8 @@
 as sequential runs, outputs per input, a bad input in its own row."""
 
 import csv
-import json
 import importlib.util
+import json
 from pathlib import Path
 
 import numpy as np

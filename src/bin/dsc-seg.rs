@@ -2,7 +2,8 @@
 
 use clap::{Parser, Subcommand};
 use dsc_seg::batch::{
-    expand_inputs, image_subfolders, is_batch_folder, Batch, Shard, Status, Task,
+    expand_inputs, image_subfolders, is_batch_folder, nifti_volumes_left_out, Batch, Shard, Status,
+    Task,
 };
 use dsc_seg::options::{one_line, Segment3dOptions, SegmentOptions};
 use dsc_seg::pipeline::{
@@ -325,6 +326,7 @@ fn run_batch(
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     print_skipped_subfolders(&image_subfolders(paths, task_is_3d(&task)));
+    print_skipped_volumes(&nifti_volumes_left_out(paths, task_is_3d(&task)));
     let batch = Batch {
         inputs: expand_inputs(paths, task_is_3d(&task))?,
         task,
@@ -376,6 +378,19 @@ fn print_skipped_subfolders(folders: &[PathBuf]) {
         eprintln!(
             "note: the images in {} are not segmented: a folder's images are taken from it \
              alone; name a subfolder as an input to include it",
+            names.join(", ")
+        );
+    }
+}
+
+/// Names the NIfTI volumes of the folders given to `segment`, which it
+/// leaves to `segment3d`.
+fn print_skipped_volumes(volumes: &[PathBuf]) {
+    if !volumes.is_empty() {
+        let names: Vec<String> = volumes.iter().map(|f| f.display().to_string()).collect();
+        eprintln!(
+            "note: {} are NIfTI volumes, not segmented by `segment`: segment them with \
+             `dsc-seg segment3d`",
             names.join(", ")
         );
     }

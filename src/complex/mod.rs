@@ -477,17 +477,18 @@ impl<K: Dim> Complex<K> {
         )
     }
 
-    /// [`Complex::compact`] without allocating (but when it renumbers
-    /// spatially): the arrays are compacted in place (live entries keep
-    /// their relative order, exactly as `compact` numbers them) and the maps
-    /// are kept in [`Complex::last_cell_map`] and [`Complex::last_vertex_map`].
-    /// The deform loop calls this every iteration. In 3D, once a quarter of
-    /// the cells were appended since the last time, it also renumbers both
-    /// in spatial order (`reorder.rs`; see
-    /// [`Complex::last_compaction_reordered`]), and the maps compose both
-    /// steps.
+    /// [`Complex::compact`]: the arrays are compacted in place, without
+    /// allocating (live entries keep their relative order, exactly as
+    /// `compact` numbers them), and the maps are kept in
+    /// [`Complex::last_cell_map`] and [`Complex::last_vertex_map`]. The
+    /// deform loop calls this every iteration. In 3D, once a quarter of the
+    /// cells were appended since the last time, it then also renumbers both
+    /// in spatial order into new arrays (`reorder.rs`; see
+    /// [`Complex::last_compaction_reordered`]): the order is then spatial,
+    /// and the maps compose both steps.
     ///
-    /// The entries below the first dead vertex (cell) keep their index: an
+    /// In the compaction itself the entries below the first dead vertex
+    /// (cell) keep their index: an
     /// iteration's edge flips replace a few cells and kill no vertex, so
     /// usually no vertex moves and half of the cells stay where they are.
     /// Those are not copied, and of their references only the ones past
@@ -537,9 +538,9 @@ impl<K: Dim> Complex<K> {
     }
 
     /// The vertex half of [`compact_in_place`](Self::compact_in_place): the
-    /// vertices from `kept.0` on move down to their new index, and every
-    /// vertex's cell is renumbered where it lies from `kept.1` on; `n`
-    /// vertices stay.
+    /// vertices from `kept_vertices` on move down to their new index, and
+    /// every vertex's cell is renumbered where it lies from `kept_cells` on;
+    /// `n` vertices stay.
     fn carry_vertices(
         &mut self,
         vmap: &[Option<VertexId>],
@@ -574,9 +575,9 @@ impl<K: Dim> Complex<K> {
     }
 
     /// The cell half of [`compact_in_place`](Self::compact_in_place): a cell
-    /// below `kept.1` stays and has only its references past the kept
-    /// prefixes renumbered; the cells from `kept.1` on move down to their new
-    /// index; `m` cells stay.
+    /// below `kept_cells` stays and has only its references past the kept
+    /// prefixes renumbered; the cells from `kept_cells` on move down to
+    /// their new index; `m` cells stay.
     fn carry_cells(
         &mut self,
         vmap: &[Option<VertexId>],

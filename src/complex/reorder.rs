@@ -35,10 +35,11 @@ impl<K: Dim> Complex<K> {
 
     /// Holds the spatial renumbering off (`held`) or lets it happen again.
     /// A sweep that relabels cells one after the other in id order (the
-    /// guarded label flips) decides differently when the ids follow space:
-    /// on a coarse start refined in passes, each relabelled by such a sweep,
-    /// the spatial order chained the flips and the start began further from
-    /// the answer, so the refined start holds it off until it is done.
+    /// guarded label flips) decides differently when the ids follow space,
+    /// where one relabelled cell makes its neighbour's flip pay next; the
+    /// refined 3D start, whose passes each end with such a sweep over the
+    /// cells just refined, holds the renumbering off until its passes end
+    /// (`benches/RESULTS.md`, "Speed, 3D").
     pub fn hold_spatial_renumbering(&mut self, held: bool) {
         self.book.renumbering_held = held;
     }

@@ -254,13 +254,15 @@ impl Volume {
                 });
             }
             match dec.colortype().map_err(bad)? {
-                // Packed bits, eight pixels to a byte: a bilevel mask.
+                // Packed samples of under a byte (a 1-bit bilevel mask, 2- or
+                // 4-bit gray).
                 tiff::ColorType::Gray(bits) if bits < 8 => {
                     return Err(IoError::Unsupported {
                         path: path.to_path_buf(),
                         reason: format!(
-                            "page {nz} has {bits}-bit samples (a bilevel image); \
-                             save the stack with 8-bit samples"
+                            "page {nz} has {bits}-bit samples{}; save the stack with 8-bit \
+                             samples",
+                            if bits == 1 { " (a bilevel image)" } else { "" }
                         ),
                     })
                 }
@@ -708,6 +710,36 @@ pub(crate) fn natural_cmp(a: &str, b: &str) -> Ordering {
 
 /// Size of a NIfTI-1 header.
 const NIFTI_HDR: usize = 348;
+
+/// Whether the NIfTI-1 file at `path` holds more than one slice (its
+/// header's third dimension, or a fourth, above 1), read from its header
+/// alone; `None` if the header cannot be read. A folder of images lists its
+/// NIfTI slices for `segment` and leaves the volumes to `segment3d` without
+/// reading them whole.
+pub fn nifti_is_volume(path: &Path) -> Option<bool> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).ok()?;
+    let mut header = [0u8; NIFTI_HDR];
+    let gz = path.to_string_lossy().to_ascii_lowercase().ends_with(".gz");
+    if gz {
+        flate2::read::MultiGzDecoder::new(file)
+            .read_exact(&mut header)
+            .ok()?;
+    } else {
+        std::io::BufReader::new(file).read_exact(&mut header).ok()?;
+    }
+    let le = i32::from_le_bytes(header[0..4].try_into().ok()?) == NIFTI_HDR as i32;
+    let dim = |k: usize| {
+        let a = [header[40 + 2 * k], header[41 + 2 * k]];
+        if le {
+            i16::from_le_bytes(a)
+        } else {
+            i16::from_be_bytes(a)
+        }
+    };
+    let rank = dim(0).clamp(0, 7) as usize;
+    Some((3..=rank).any(|k| dim(k) > 1))
+}
 
 /// The sample type of NIfTI `datatype` (checked by the caller); `scaled`
 /// samples (`scl_slope`, `scl_inter`) are real numbers whatever their type.

@@ -235,11 +235,12 @@ fn load_nifti_slice(path: &Path, channel: Option<usize>) -> Result<Image2> {
 /// Why a NIfTI of `dims` voxels is not a slice `segment` reads: a volume,
 /// for `segment3d`; or a slice one voxel thick along x or y (sagittal,
 /// coronal), which `segment3d` cannot mesh either, so the way out is to
-/// make its thin axis the third.
+/// make its thin axis the third (by a cyclic permutation of the axes, which
+/// keeps their handedness, so no left-right flip).
 fn not_a_z_slice([nx, ny, nz]: [usize; 3]) -> String {
     let thin_axis = match (nx, ny) {
         (1, n) if n > 1 => Some(("x", "y z x")),
-        (n, 1) if n > 1 => Some(("y", "x z y")),
+        (n, 1) if n > 1 => Some(("y", "z x y")),
         _ => None,
     };
     match thin_axis {

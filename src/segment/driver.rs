@@ -733,7 +733,10 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     }
 
     fn data_energy(&self) -> f64 {
-        debug_assert!(self.cells.len() >= self.complex.cell_capacity());
+        assert!(
+            self.cells.len() >= self.complex.cell_capacity(),
+            "a statistic per cell id"
+        );
         self.complex
             .label_slots()
             .zip(&self.cells)

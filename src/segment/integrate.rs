@@ -568,7 +568,7 @@ impl PhaseStats {
     pub fn update<K: Raster>(&mut self, complex: &Complex<K>, cells: &[CellStats]) {
         self.count.iter_mut().for_each(|c| *c = 0);
         self.sum.iter_mut().for_each(|s| *s = 0.0);
-        debug_assert!(
+        assert!(
             cells.len() >= complex.cell_capacity(),
             "a statistic per cell id"
         );
