@@ -759,7 +759,7 @@ impl SegmentParams {
         }
         let step = sample_step(dims, spacing);
         let side = (smallest_extent(dims, spacing) / step).max(1.0) as usize;
-        default_edge_length(side, side, self.phases) * step
+        default_edge_length_of(dims, side, self.phases) * step
     }
 
     /// These parameters for `phases` phases: the phase count replaced, and a
@@ -787,7 +787,7 @@ impl SegmentParams {
         // a thin stack of slices must not get cells thicker than itself.
         let side = dims.iter().copied().filter(|&d| d > 1).min().unwrap_or(1);
         self.edge_length
-            .unwrap_or_else(|| default_edge_length(side, side, self.phases))
+            .unwrap_or_else(|| default_edge_length_of(dims, side, self.phases))
     }
 }
 
@@ -846,6 +846,30 @@ pub fn default_edge_length(width: usize, height: usize, phases: usize) -> f64 {
         .clamp(3.0, 10.0)
         .min(m / 4.0)
         .max(1.0)
+}
+
+/// Smallest default edge length of a volume, in voxels: the floor of
+/// [`default_edge_length`], which its cap at a quarter of the thinnest side
+/// would undercut on a stack of a few slices. A tetrahedral mesh at L = 1
+/// holds about 12 cells per voxel: a disk in a 200×200×3 stack took 1.47
+/// million tets, 1 GB and 7.6 s at L = 1, and 43 257 tets, 54 MB and 0.3 s
+/// at L = 3, with the same labels (a 300×300×6 stack with two disks: 1.84
+/// million tets and 1.26 GB at L = 1.5, 189 194 tets and 186 MB at 3, mean
+/// Dice 1.0000 and 0.9999). Never above the thinnest side, so that cells
+/// are no thicker than the stack.
+pub const MIN_VOLUME_EDGE_LENGTH: f64 = 3.0;
+
+/// The default edge length of an image or volume of `dims` samples whose
+/// smallest side is `side`: [`default_edge_length`], and for a volume not
+/// below [`MIN_VOLUME_EDGE_LENGTH`] (nor above `side`).
+fn default_edge_length_of(dims: [usize; 3], side: usize, phases: usize) -> f64 {
+    let l = default_edge_length(side, side, phases);
+    let volume = dims.iter().all(|&d| d > 1);
+    if volume {
+        l.max(MIN_VOLUME_EDGE_LENGTH.min(side as f64))
+    } else {
+        l
+    }
 }
 
 /// Noise-to-contrast ratio `σ̂/Δ` (noise over the smallest gap between the
@@ -940,6 +964,11 @@ mod tests {
         assert_eq!(p.resolved_edge_length([512, 512, 512]), 8.0);
         // a thin stack: 20 slices, not the 512-pixel slices, set L
         assert_eq!(p.resolved_edge_length([512, 512, 20]), 3.0);
+        // a stack of a few slices: not below 3 voxels, nor above its depth
+        assert_eq!(p.resolved_edge_length([200, 200, 3]), 3.0);
+        assert_eq!(p.resolved_edge_length([200, 200, 5]), 3.0);
+        assert_eq!(p.resolved_edge_length([200, 200, 2]), 2.0);
+        assert_eq!(p.resolved_edge_length([200, 200, 1]), 3.125);
         let given = SegmentParams {
             edge_length: Some(5.5),
             ..p
