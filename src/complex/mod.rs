@@ -510,10 +510,7 @@ impl<K: Dim> Complex<K> {
         let n = renumber(&mut vmap, vertices, VertexId, |i| {
             self.vertex_cell[i].is_some()
         });
-        let ordered = self.alive[..self.book.ordered_cells.min(self.alive.len())]
-            .iter()
-            .filter(|&&a| a)
-            .count();
+        let ordered = self.ordered_survivors(kept_cells);
         let cells = (self.alive.len(), kept_cells);
         let m = renumber(&mut cmap, cells, CellId, |i| self.alive[i]);
         let kept = (kept_vertices, kept_cells);

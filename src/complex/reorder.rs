@@ -33,6 +33,19 @@ impl<K: Dim> Complex<K> {
             && (live - ordered) * REORDER_SHARE > live
     }
 
+    /// How many live cells lie before the end of the last spatial order
+    /// (the compaction's first `kept_cells` are all live): the cells in that
+    /// order after the compaction. 0 where nothing is renumbered, which
+    /// need not count.
+    pub(super) fn ordered_survivors(&self, kept_cells: usize) -> usize {
+        if !K::REORDERS_SPATIALLY {
+            return 0;
+        }
+        let end = self.book.ordered_cells.min(self.alive.len());
+        let kept = kept_cells.min(end);
+        kept + self.alive[kept..end].iter().filter(|&&a| a).count()
+    }
+
     /// Holds the spatial renumbering off (`held`) or lets it happen again.
     /// A sweep that relabels cells one after the other in id order (the
     /// guarded label flips) decides differently when the ids follow space,

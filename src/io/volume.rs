@@ -711,11 +711,12 @@ pub(crate) fn natural_cmp(a: &str, b: &str) -> Ordering {
 /// Size of a NIfTI-1 header.
 const NIFTI_HDR: usize = 348;
 
-/// Whether the NIfTI-1 file at `path` holds more than one slice (its
-/// header's third dimension, or a fourth, above 1), read from its header
-/// alone; `None` if the header cannot be read. A folder of images lists its
-/// NIfTI slices for `segment` and leaves the volumes to `segment3d` without
-/// reading them whole.
+/// Whether the NIfTI-1 file at `path` is a volume (more than one voxel
+/// along each of its three axes, or more than one along a fourth), read
+/// from its header alone; `None` if the header cannot be read. A folder of
+/// images lists its slices for `segment` (one thick along x or y too, whose
+/// row then says how to reorient it) and leaves the volumes to `segment3d`
+/// without reading them whole.
 pub fn nifti_is_volume(path: &Path) -> Option<bool> {
     use std::io::Read;
     let file = std::fs::File::open(path).ok()?;
@@ -738,7 +739,8 @@ pub fn nifti_is_volume(path: &Path) -> Option<bool> {
         }
     };
     let rank = dim(0).clamp(0, 7) as usize;
-    Some((3..=rank).any(|k| dim(k) > 1))
+    let thick = |k: usize| k <= rank && dim(k) > 1;
+    Some((1..=3).all(thick) || (4..=rank).any(thick))
 }
 
 /// The sample type of NIfTI `datatype` (checked by the caller); `scaled`

@@ -382,7 +382,8 @@ fn a_batch_of_nifti_volumes_with_a_voxel_size_is_skipped_when_complete() {
 /// A folder given to `segment` takes its NIfTI slices too (segmented as 2D
 /// images, labels in a NIfTI with the header), and names the NIfTI volumes
 /// it leaves to `segment3d` on stderr, rather than passing over either in
-/// silence; a volume beside an image of the same stem is no clash.
+/// silence; a volume beside an image of the same stem is no clash, and a
+/// slice one voxel thick along x gets its row with the way to reorient it.
 #[test]
 fn a_folder_of_nifti_slices_is_segmented_and_its_volumes_named() {
     use dsc_seg::io::{save_nifti, Volume};
@@ -402,17 +403,28 @@ fn a_folder_of_nifti_slices_is_segmented_and_its_volumes_named() {
     };
     save_nifti(folder.join("slice.nii.gz"), &square(1)).unwrap();
     save_nifti(folder.join("photo.nii"), &square(6)).unwrap();
+    let sagittal = Volume::from_fn(
+        1,
+        20,
+        24,
+        |_, j, k| if j < 10 && k < 12 { 0.8 } else { 0.2 },
+    );
+    save_nifti(folder.join("sagittal.nii"), &sagittal).unwrap();
     write_disk(&folder, "photo.png", 32, 1);
     let out = d.path().join("out");
     let o = run(&["--quiet", "--outputs", "labels,report"], &[&folder], &out);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
+    assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
         err.contains("photo.nii are NIfTI volumes") && err.contains("segment3d"),
         "{err}"
     );
     let rows = summary(&out.join("summary.csv"));
-    assert_eq!(rows.len(), 3, "{rows:?}");
+    assert_eq!(rows.len(), 4, "{rows:?}");
+    // a slice one voxel thick along x is listed; its row says how to reorient it
+    let sagittal = row(&rows, "sagittal");
+    assert_eq!(sagittal[6], "error", "{rows:?}");
+    assert!(sagittal[7].contains("fslswapdim"), "{sagittal:?}");
     assert_eq!(row(&rows, "slice")[6], "done", "{rows:?}");
     assert_eq!(row(&rows, "photo")[6], "done", "{rows:?}");
     assert!(row(&rows, "photo")[1].ends_with("photo.png"), "{rows:?}");
