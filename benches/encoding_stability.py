@@ -14,7 +14,9 @@ usage (from the repository root, after `cargo build --release` and
 
 `--volumes four_phase:64:4 three_phase:64:3` picks the volumes (phantom,
 side, phases), `--noise` and `--seeds` the noise, `--encodings` the
-re-encodings.
+re-encodings. `--images four_phase:128:4` adds 2D phantoms (`dsc-seg
+phantom`, segmented with the 2D default), so that the agreement at a given
+number of samples across can be set beside the volumes'.
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ import subprocess
 
 import numpy as np
 import tifffile
+from PIL import Image
 
 BIN = os.path.join(os.path.dirname(__file__), "..", "target", "release", "dsc-seg")
 
@@ -57,10 +60,14 @@ def encodings(volume, names):
     return {name: out[name] for name in names}
 
 
-def segment(path, phases, extra, out):
-    subprocess.run([BIN, "segment3d", path, "--phases", str(phases), "--quiet",
+def segment(path, phases, extra, out, flat=False):
+    """The labels of `segment3d` (or of `segment` for a 2D image, `flat`)."""
+    command = "segment" if flat else "segment3d"
+    subprocess.run([BIN, command, path, "--phases", str(phases), "--quiet",
                     "--outputs", "labels", "--out", out, *extra],
                    check=True, stdout=subprocess.DEVNULL)
+    if flat:
+        return np.asarray(Image.open(os.path.join(out, "labels.png")))
     return tifffile.imread(os.path.join(out, "labels.tif"))
 
 
@@ -72,6 +79,8 @@ def main():
                     help="also --no-fine-finish with these interface edge lengths L (voxels)")
     ap.add_argument("--volumes", type=volume_spec, nargs="*", default=VOLUMES,
                     help="phantom:side:phases (default: the four volumes above)")
+    ap.add_argument("--images", type=volume_spec, nargs="*", default=[],
+                    help="2D phantoms phantom:side:phases, with the default mode only")
     ap.add_argument("--noise", type=float, nargs="*", default=[0.1])
     ap.add_argument("--seeds", type=int, nargs="*", default=[2])
     ap.add_argument("--encodings", nargs="*", choices=ENCODINGS, default=ENCODINGS)
@@ -86,25 +95,32 @@ def main():
     os.makedirs(a.out, exist_ok=True)
     print("| volume | mode | re-encoding | Dice vs 8-bit run | Dice vs truth (8-bit run's) |")
     print("|---|---|---|---|---|")
-    runs = [(v, s, seed) for v in a.volumes for s in a.noise for seed in a.seeds]
-    for (name, n, phases), sigma, seed in runs:
-        volume_name = f"{name}_{n}"
+    runs = [(v, s, seed, False) for v in a.volumes for s in a.noise for seed in a.seeds]
+    runs += [(v, s, seed, True) for v in a.images for s in a.noise for seed in a.seeds]
+    for (name, n, phases), sigma, seed, flat in runs:
+        volume_name = f"{name}_{n}" + ("_2d" if flat else "")
         if (sigma, seed) != (0.1, 2):
             volume_name += f"_s{sigma:.2f}_seed{seed}"
         data = os.path.join(a.out, volume_name)
-        subprocess.run([BIN, "phantom3d", name, "--size", str(n), "--noise", str(sigma),
-                        "--seed", str(seed), "--out", data], check=True, stdout=subprocess.DEVNULL)
-        eight = os.path.join(data, name + ".tif")
-        truth = tifffile.imread(os.path.join(data, name + "_labels.tif"))
-        volume = tifffile.imread(eight).astype(np.float64)
-        for mode, extra in modes.items():
+        subprocess.run([BIN, "phantom" if flat else "phantom3d", name, "--size", str(n),
+                        "--noise", str(sigma), "--seed", str(seed), "--out", data],
+                       check=True, stdout=subprocess.DEVNULL)
+        if flat:
+            eight = os.path.join(data, name + ".png")
+            truth = np.asarray(Image.open(os.path.join(data, name + "_labels.png")))
+            volume = np.asarray(Image.open(eight)).astype(np.float64)
+        else:
+            eight = os.path.join(data, name + ".tif")
+            truth = tifffile.imread(os.path.join(data, name + "_labels.tif"))
+            volume = tifffile.imread(eight).astype(np.float64)
+        for mode, extra in ({"default": []} if flat else modes).items():
             tag = mode.replace(", ", "_").replace(" = ", "").replace(" ", "_")
-            base = segment(eight, phases, extra, os.path.join(data, f"{tag}_8bit"))
+            base = segment(eight, phases, extra, os.path.join(data, f"{tag}_8bit"), flat)
             base_truth = mean_dice(base, truth, phases)
             for what, encoded in encodings(volume, a.encodings).items():
                 path = os.path.join(data, f"{what.replace(' ', '_')}.tif")
                 tifffile.imwrite(path, encoded)
-                labels = segment(path, phases, extra, os.path.join(data, f"{tag}_{what}"))
+                labels = segment(path, phases, extra, os.path.join(data, f"{tag}_{what}"), flat)
                 print(f"| {volume_name} | {mode} | {what} | {mean_dice(labels, base, phases):.4f} "
                       f"| {mean_dice(labels, truth, phases):.4f} ({base_truth:.4f}) |")
 
