@@ -45,6 +45,7 @@ def read_input(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
         import tifffile
 
         with tifffile.TiffFile(path) as tif:
+            refuse_time_series(tif)
             array = tif.asarray()
             spacing = tiff_spacing(tif, array.ndim)
     else:
@@ -59,6 +60,18 @@ def read_input(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
     if spacing is None or all(s == 1.0 for s in spacing):
         return array, {}
     return array, {"spacing": spacing}
+
+
+def refuse_time_series(tif) -> None:
+    """Refuses an ImageJ TIFF of time points (``frames=``), as ``dsc-seg``
+    does: read as an array it has the shape of a volume, and segmenting it
+    as one would mesh time as depth."""
+    frames = (tif.imagej_metadata or {}).get("frames", 1)
+    if isinstance(frames, int) and frames > 1:
+        raise ValueError(
+            f"an ImageJ time series of {frames} time points, not the slices of a volume: "
+            "segment each time point as an image"
+        )
 
 
 def gray_if_gray(array: np.ndarray) -> np.ndarray:

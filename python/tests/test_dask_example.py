@@ -87,6 +87,19 @@ def test_a_stacks_voxel_size_is_read_as_the_cli_reads_it(tmp_path, cli):
     )
 
 
+def test_a_time_series_is_refused_as_the_cli_refuses_it(tmp_path):
+    """Time points of one plane (tifffile's ``TYX`` with ``imagej=True``) are
+    no volume: its row fails, naming the time series, as ``segment3d`` does."""
+    example = load_example()
+    frames, _ = dsc_seg.phantom("two_balls", size=20, noise=0.1, seed=1)
+    series = tmp_path / "time_lapse.tif"
+    tifffile.imwrite(series, frames, imagej=True, metadata={"axes": "TYX"})
+    row = example.segment_file(str(series), str(tmp_path / "out"), 2, "report", {})
+    assert row["status"] == "error", row
+    assert "time series of 20 time points" in row["error"], row
+    assert not (tmp_path / "out" / "time_lapse").exists()
+
+
 def test_a_spacing_option_overrides_the_files(tmp_path):
     example = load_example()
     volume, _ = dsc_seg.phantom("two_balls", size=20, noise=0.1, seed=1)

@@ -1,4 +1,5 @@
-//! ImageJ hyperstacks: TIFFs whose pages interleave channels or time points.
+//! ImageJ hyperstacks and time series: TIFFs whose pages are not the slices
+//! of one volume.
 //!
 //! Fiji stores a hyperstack of C channels, Z slices and T frames as C·Z·T
 //! pages back to back, saying so only in its `ImageJ=` description
@@ -7,10 +8,14 @@
 //! points into one "volume" without a word. The readers refuse it instead,
 //! naming the extents, so the user picks one channel and one time point.
 //!
-//! Only pages that interleave two of these axes are refused: a single run of
-//! pages is one sequence whatever ImageJ calls it, and tifffile's
-//! `imwrite(..., imagej=True)` of a 3-D array declares `channels=N` for what
-//! its writer meant as N slices.
+//! Pages that interleave two of these axes are refused, and so are time
+//! points alone (`frames=T`, no slices: a time-lapse of one plane, which
+//! Fiji and tifffile's `imwrite(..., imagej=True, metadata={'axes': 'TYX'})`
+//! declare only for frames): segmented as a volume, time would be meshed as
+//! depth, its interfaces smoothed across frames and measured in voxels of a
+//! time step. A run of channels alone is read as slices: tifffile's
+//! `imwrite(..., imagej=True)` of a 3-D array without axes declares
+//! `channels=N` for what its writer meant as N slices.
 
 /// The channels, slices and frames an `ImageJ=` description declares
 /// (each 1 when not given).
@@ -26,8 +31,9 @@ pub struct Hyperstack {
 
 impl Hyperstack {
     /// Reads the extents from a TIFF `ImageDescription`; `None` unless it is
-    /// an `ImageJ=` description with more than one of at least two of them
-    /// (one run of slices, channels or frames is read as a stack).
+    /// an `ImageJ=` description with more than one of at least two of them,
+    /// or more than one time point (one run of slices or of channels is read
+    /// as a stack).
     pub fn from_description(description: &str) -> Option<Self> {
         if !description.starts_with("ImageJ=") {
             return None;
@@ -50,7 +56,12 @@ impl Hyperstack {
             .filter(|&&n| n > 1)
             .count()
             > 1;
-        interleaved.then_some(stack)
+        (interleaved || stack.is_time_series()).then_some(stack)
+    }
+
+    /// Whether the pages are time points of one plane (no slices, one channel).
+    pub fn is_time_series(&self) -> bool {
+        self.frames > 1 && self.slices == 1 && self.channels == 1
     }
 
     /// The hyperstack the current TIFF page's description declares, if any.
@@ -65,6 +76,16 @@ impl Hyperstack {
 
     /// Why such a file is refused, and what to do instead.
     pub fn refusal(&self) -> String {
+        if self.is_time_series() {
+            return format!(
+                "an ImageJ time series of {}, not the slices of a volume: segment each \
+                 time point as an image with `dsc-seg segment` (Fiji: Image › Stacks › \
+                 Stack to Images, then save them to a folder), or, if the pages are Z \
+                 slices, say so (Fiji: Image › Properties…, {} slices, 1 frame)",
+                counted(self.frames, "time point"),
+                self.frames
+            );
+        }
         format!(
             "an ImageJ hyperstack of {} × {} × {}; its pages are not one volume: \
              save one channel at one time point (Fiji: Image › Duplicate…) and segment that",
@@ -97,6 +118,20 @@ mod tests {
         assert_eq!(Hyperstack::from_description(t).unwrap().frames, 3);
     }
 
+    /// tifffile's description of a `TYX` array (`imagej=True`): time points
+    /// of one plane, refused by their own message.
+    #[test]
+    fn time_points_alone_are_a_time_series() {
+        let t = "ImageJ=1.11a\nimages=5\nframes=5\nhyperstack=true\nmode=grayscale\nloop=false";
+        let series = Hyperstack::from_description(t).unwrap();
+        assert!(series.is_time_series());
+        assert!(series.refusal().contains("time series of 5 time points"));
+        let two_channels = "ImageJ=1.53t\nimages=10\nchannels=2\nframes=5\n";
+        let h = Hyperstack::from_description(two_channels).unwrap();
+        assert!(!h.is_time_series());
+        assert!(h.refusal().contains("2 channels × 1 slice × 5 time points"));
+    }
+
     #[test]
     fn one_run_of_pages_or_another_description_is_not_one() {
         let z = "ImageJ=1.11a\nimages=24\nslices=24\nunit=um\nspacing=2.0\n";
@@ -104,8 +139,6 @@ mod tests {
         // tifffile's description of a 3-D array written with imagej=True.
         let c = "ImageJ=1.11a\nimages=24\nchannels=24\nhyperstack=true\nmode=grayscale\n";
         assert_eq!(Hyperstack::from_description(c), None);
-        let t = "ImageJ=1.53t\nimages=6\nframes=6\n";
-        assert_eq!(Hyperstack::from_description(t), None);
         assert_eq!(
             Hyperstack::from_description("{\"shape\": [2, 8, 32]}"),
             None

@@ -765,6 +765,36 @@ fn an_imagej_hyperstack_is_refused_by_both_commands() {
     fails(&SEGMENT3D, &input, &out, extents);
 }
 
+/// Five time points of one plane, as tifffile writes a `TYX` array with
+/// `imagej=True`: not a volume (time would be meshed as depth), so both
+/// commands refuse it as a time series, `segment` without pointing to
+/// `segment3d`.
+#[test]
+fn an_imagej_time_series_is_refused_by_both_commands() {
+    use tiff::encoder::{colortype, TiffEncoder};
+    let d = tmp();
+    let p = d.path().join("time_lapse.tif");
+    let mut enc = TiffEncoder::new(std::fs::File::create(&p).unwrap()).unwrap();
+    let desc = "ImageJ=1.11a\nimages=5\nframes=5\nhyperstack=true\nmode=grayscale\nloop=false";
+    for frame in 0..5u8 {
+        let mut image = enc.new_image::<colortype::Gray8>(16, 16).unwrap();
+        if frame == 0 {
+            let tag = tiff::tags::Tag::ImageDescription;
+            image.encoder().write_tag(tag, desc).unwrap();
+        }
+        let data: Vec<u8> = (0..256u32).map(|i| (i % 5 * 40) as u8 + frame).collect();
+        image.write_data(&data).unwrap();
+    }
+    drop(enc);
+    let input = [p.to_str().unwrap()];
+    let out = empty_out(&d);
+    let said = "an ImageJ time series of 5 time points";
+    let from_3d = fails(&SEGMENT3D, &input, &out, said);
+    let from_2d = fails(&SEGMENT, &input, &out, said);
+    assert!(from_3d.contains("time_lapse.tif") && from_2d.contains("time_lapse.tif"));
+    assert!(!from_2d.contains("segment3d"), "{from_2d}");
+}
+
 #[test]
 fn a_colour_image_is_said_to_be_segmented_as_its_luminance() {
     let d = tmp();
