@@ -439,6 +439,14 @@ pub(crate) fn segment_image_then<T>(
     let ready = ready()?;
 
     let mut report = run_with_progress(&mut seg, params.max_iterations, quiet)?;
+    if phase_choice
+        .as_ref()
+        .is_some_and(|c| c.floor_warning().is_some())
+    {
+        // The choice's warning says why two phases are not two regions.
+        let lost = std::mem::take(&mut report.lost_phase_warnings);
+        report.warnings.retain(|w| !lost.contains(w));
+    }
     if let Source::File(path) = &provenance.source {
         let alpha = image.transparency().warning(path, w * h);
         report.warnings.splice(0..0, alpha);

@@ -126,13 +126,16 @@ impl PhaseChoice {
     /// A warning when two phases, the fewest there are, failed the tests of
     /// regions: two is taken because one is no segmentation, not because
     /// the data show two (pure noise, or a smooth ramp, split anywhere).
+    /// It says why the two failed, so it stands in for the run's own
+    /// warnings of a lost phase (which would also speak of two phases
+    /// "asked for").
     pub fn floor_warning(&self) -> Option<String> {
         let first = self.trials.first()?;
         let reason = first.reason.as_ref()?;
         (self.phases == 2 && first.phases == 2).then(|| {
             format!(
-                "--phases auto found no two distinct regions ({reason}); the image may hold \
-                 a single phase"
+                "--phases auto found no two distinct regions, so the image may hold a \
+                 single phase: with two, {reason}"
             )
         })
     }

@@ -210,8 +210,15 @@ pub struct SegmentReport {
     /// next flip round and were undone ([`crate::segment::reseed_trial`]).
     pub reseeds_undone: usize,
     /// What the user must know about the result: phases lost at the end
-    /// (empty, or duplicating another's mean). Empty when all is well.
+    /// (empty, or duplicating another's mean), the iteration cap, correlated
+    /// noise. Empty when all is well.
     pub warnings: Vec<String>,
+    /// Those of `warnings` that say a phase was lost, for a caller that
+    /// says it otherwise: `--phases auto` at its floor of two phases
+    /// ([`PhaseChoice::floor_warning`](super::auto::PhaseChoice::floor_warning))
+    /// replaces them. Not in the report, where `warnings` has them.
+    #[serde(skip)]
+    pub lost_phase_warnings: Vec<String>,
     /// Per-iteration records.
     pub history: Vec<IterationRecord>,
     /// Stage timings.
@@ -1556,7 +1563,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         lost.extend(self.vestige_phases(&lost));
         lost.extend(self.absorbed_phases(&lost));
         lost.extend(self.shared_plateau_phases(&lost));
-        let mut warnings: Vec<String> = lost
+        let lost_phase_warnings: Vec<String> = lost
             .iter()
             .map(|l| {
                 let undone = if self.refused_reseeds.contains(&l.label()) {
@@ -1572,6 +1579,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
                 )
             })
             .collect();
+        let mut warnings = lost_phase_warnings.clone();
         if stop_reason == StopReason::MaxIterations {
             warnings.push(cap_warning(self.params.max_iterations));
         }
@@ -1595,6 +1603,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             reseeds: self.reseeds,
             reseeds_undone: self.reseeds_undone,
             warnings,
+            lost_phase_warnings,
             history: self.history.clone(),
             times: self.times,
             vertices: self.complex.vertex_count(),

@@ -223,3 +223,54 @@ fn strong_correlated_noise_warns() {
         assert_eq!(named, warns, "σ {sigma}: {}", report["warnings"]);
     }
 }
+
+/// `--phases auto` on pure noise keeps two phases and says once why they
+/// are not two regions: its warning stands in for the run's own about a
+/// lost phase, which would also speak of two phases "asked for".
+#[test]
+fn phases_auto_on_noise_warns_once() {
+    let d = tmp();
+    let n = 96;
+    let mut noise = vec![0.5f32; n * n];
+    dsc_seg::phantom::noise::add_gaussian_noise(&mut noise, 0.1, 1);
+    let samples: Vec<u8> = noise.iter().map(|&v| (v * 255.0).round() as u8).collect();
+    let image = d.path().join("noise.png");
+    image::GrayImage::from_raw(n as u32, n as u32, samples)
+        .unwrap()
+        .save(&image)
+        .unwrap();
+    let out = d.path().join("o");
+    let args = [
+        "segment",
+        image.to_str().unwrap(),
+        "--phases",
+        "auto",
+        "--outputs",
+        "report",
+    ];
+    let o = run(&args, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let printed: Vec<String> = stderr(&o)
+        .lines()
+        .filter(|l| l.starts_with("warning: "))
+        .map(String::from)
+        .collect();
+    assert_eq!(printed.len(), 1, "{printed:?}");
+    assert!(
+        printed[0].contains("no two distinct regions"),
+        "{printed:?}"
+    );
+    assert!(
+        printed[0].contains("single phase: with two, "),
+        "{printed:?}"
+    );
+    assert!(!printed[0].contains("asked for"), "{printed:?}");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(
+        report["warnings"].as_array().unwrap().len(),
+        1,
+        "{report:?}"
+    );
+    assert_eq!(report["warnings"][0], printed[0]["warning: ".len()..]);
+}
