@@ -149,7 +149,8 @@ def segment(image: Any, phases: Union[int, str] = 2, **options: Any) -> Segmenta
     """Segments a 2D image (rows × columns) or a 3D volume (slices × rows ×
     columns) into ``phases`` phases.
 
-    Any integer or floating-point dtype is accepted (float16 as float32),
+    Any integer, floating-point or boolean dtype is accepted (float16 as
+    float32, bool as the uint8 values 0 and 1, a mask's two levels),
     with the intensities the file readers would give: uint8 divided by 255,
     uint16 by 65535, every other type as it is in 2D and mapped by its own
     range to [0, 1] in 3D. A colour image (rows × columns × 2 to 4
@@ -190,8 +191,9 @@ def _checked_array(image: Any) -> np.ndarray:
     """``image`` as the native code takes it: a NumPy array in the machine's
     byte order (FITS and some NIfTI data come big-endian), half-precision
     floats widened to float32 (the native code reads 32- and 64-bit floats),
-    and a colour image or a masked array refused rather than segmented as a
-    volume or with its mask ignored.
+    booleans as the uint8 values 0 and 1, and a colour image or a masked
+    array refused rather than segmented as a volume or with its mask
+    ignored.
 
     A colour image as NumPy and image libraries hold it (rows × columns ×
     3 or 4 channels, or 2 for gray + alpha) has the shape of a volume of as
@@ -225,6 +227,9 @@ def _checked_array(image: Any) -> np.ndarray:
         )
     if array.dtype == np.float16:
         return array.astype(np.float32)
+    if array.dtype == np.bool_:
+        # A mask: its 0/1 values, as the uint8 array `mask.astype(np.uint8)` is read.
+        return array.astype(np.uint8)
     return array
 
 

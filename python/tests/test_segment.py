@@ -66,6 +66,22 @@ def test_dtypes_map_as_the_file_readers_do():
         assert (labels == truth).mean() > 0.9, other.dtype
 
 
+def test_a_boolean_mask_is_read_as_its_uint8_values():
+    """A mask is a (trivial) two-level image: its labels are those of the
+    same 0/1 values as uint8, 2D and 3D, and the report's means are 0 and 1."""
+    _, truth = dsc_seg.phantom("two_phase", size=64)
+    _, truth3 = dsc_seg.phantom("two_balls", size=24)
+    for mask in (truth > 0, truth3 > 0):
+        result = dsc_seg.segment(mask, max_iterations=30)
+        as_uint8 = dsc_seg.segment(mask.astype(np.uint8), max_iterations=30)
+        assert np.array_equal(result.labels, as_uint8.labels)
+        assert (result.labels == mask).mean() > 0.98
+        given = result.report["input"]
+        assert given["sample_type"] == "uint8"
+        assert (given["min"], given["max"]) == (0, 1)
+        assert [round(m) for m in given["phase_means"]] == [0, 1]
+
+
 def test_the_report_gives_the_arrays_type_and_units_2d_and_3d():
     image, _ = dsc_seg.phantom("two_phase", size=64)
     volume, _ = dsc_seg.phantom("two_balls", size=24, noise=0.1)
@@ -155,7 +171,7 @@ def test_bad_arguments_raise_value_error_with_the_cli_message(tmp_path):
     with pytest.raises(ValueError, match="dimensions"):
         dsc_seg.segment(np.zeros(10))
     with pytest.raises(ValueError, match="unsupported array type"):
-        dsc_seg.segment(np.zeros((32, 32), dtype=bool))
+        dsc_seg.segment(np.zeros((32, 32), dtype=np.complex64))
     with pytest.raises(ValueError, match="NaN"):
         dsc_seg.segment(np.full((32, 32), np.nan))
     with pytest.raises(OSError, match="nope.png"):
