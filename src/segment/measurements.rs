@@ -131,8 +131,10 @@ impl Measurements {
                 sq[l as usize] += (f64::from(v) - m).powi(2);
             }
         }
-        let components = count_components(labels, frame.dims, phases);
-        let pv = partial_volume(labels, values, frame.dims, phases);
+        let (components, pv) = rayon::join(
+            || count_components(labels, frame.dims, phases),
+            || partial_volume(labels, values, frame.dims, phases),
+        );
         let voxel = frame.voxel_measure();
         let rows = (0..phases)
             .map(|p| PhaseRow {
