@@ -167,7 +167,13 @@ def segment(image: Any, phases: Union[int, str] = 2, **options: Any) -> Segmenta
     ``max_iterations=200``, ``no_label_flips=True``, ``init="disks",
     disk=[(64, 64, 20)]``, ``rigidity=0.5``; ``spacing=(x, y)`` for an image or
     ``spacing=(x, y, z)`` for a volume, the pixel/voxel size (x along the array's last axis). Run ``dsc-seg segment
-    --help`` / ``dsc-seg segment3d --help`` for the list.
+    --help`` / ``dsc-seg segment3d --help`` for the list. One keyword is
+    the array's own: ``unit``, the length unit of ``spacing`` (``"um"``,
+    ``"mm"``; 1 per pixel/voxel in it without ``spacing``), which the
+    command line takes from the file: the report's ``frame`` and
+    measurements and the written files (``labels.tif``'s resolution, a
+    ``labels.png``'s ``pHYs`` in mm) carry it, as they carry a file's
+    (without it a given size is in ``"unit"``).
 
     The GIL is released while the segmentation runs, so threads (or a Dask
     worker's threads) can segment several images at once.

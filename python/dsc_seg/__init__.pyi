@@ -36,7 +36,8 @@ class Segmentation:
 def segment(
     image: npt.ArrayLike, phases: Union[int, str] = 2, **options: Any
 ) -> Segmentation:
-    """Segments a 2D image or 3D volume; keywords are the command line's options."""
+    """Segments a 2D image or 3D volume; keywords are the command line's
+    options, and ``unit``, the length unit of ``spacing``."""
 
 def phantom(
     name: str = "two_phase",

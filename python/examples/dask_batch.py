@@ -35,9 +35,10 @@ COLUMNS = [
 
 
 def read_input(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
-    """The samples of an image or volume file, and the ``spacing`` keyword
-    when the file gives a pixel/voxel size: without it a Fiji stack of
-    0.5 × 0.5 × 2.5 µm voxels would be segmented, and measured, as cubes."""
+    """The samples of an image or volume file, and the ``spacing`` and
+    ``unit`` keywords when the file gives a pixel/voxel size: without them a
+    Fiji stack of 0.5 × 0.5 × 2.5 µm voxels would be segmented, and
+    measured, as cubes of no unit."""
     suffix = path.suffix.lower()
     if suffix == ".npy":
         return np.load(path), {}
@@ -47,7 +48,7 @@ def read_input(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
         with tifffile.TiffFile(path) as tif:
             refuse_time_series(tif)
             array = tif.asarray()
-            spacing = tiff_spacing(tif, array.ndim)
+            spacing, unit = tiff_spacing(tif, array.ndim)
     else:
         from PIL import Image
 
@@ -57,9 +58,11 @@ def read_input(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
             dpi = image.info.get("dpi")
         array = gray_if_gray(array)
         spacing = tuple(25.4 / d for d in dpi) if dpi and min(dpi) > 0 else None
-    if spacing is None or all(s == 1.0 for s in spacing):
+        unit = "mm"
+    if spacing is None:
         return array, {}
-    return array, {"spacing": spacing}
+    # A size without a unit ("px": ImageJ's "pixel", or none) is no physical size.
+    return array, {"spacing": spacing, **({"unit": unit} if unit != "px" else {})}
 
 
 def refuse_time_series(tif) -> None:
@@ -85,12 +88,12 @@ def gray_if_gray(array: np.ndarray) -> np.ndarray:
     return colour[..., 0] if (colour == colour[..., :1]).all() else array
 
 
-def tiff_spacing(tif, ndim: int) -> tuple[float, ...] | None:
+def tiff_spacing(tif, ndim: int) -> tuple[tuple[float, ...] | None, str]:
     """The pixel size (x, y), or voxel size (x, y, z), that ``dsc-seg``
-    reads from a TIFF: the resolution tags (pixels per inch or centimetre
-    give millimetres, pixels per unit Fiji/ImageJ's ``unit``) and ImageJ's
-    ``spacing`` for z (1 without it); None without resolution tags. The
-    length unit itself is not passed on: the outputs name it ``unit``."""
+    reads from a TIFF, and its length unit: the resolution tags (pixels per
+    inch or centimetre give millimetres, pixels per unit Fiji/ImageJ's
+    ``unit``) and ImageJ's ``spacing`` for z (1 without it); None and
+    ``"px"`` without resolution tags."""
     tags = tif.pages[0].tags
 
     def step(name: str) -> float | None:
@@ -102,20 +105,27 @@ def tiff_spacing(tif, ndim: int) -> tuple[float, ...] | None:
 
     x = step("XResolution")
     if x is None:
-        return None
+        return None, "px"
     y = step("YResolution") or x
     imagej = tif.imagej_metadata or {}
     unit_tag = tags.get("ResolutionUnit")
     unit = None if unit_tag is None else int(unit_tag.value)
     if unit == 3:  # centimetre
-        scale = 10.0
+        scale, name = 10.0, "mm"
     elif unit == 1 or (unit is None and "unit" in imagej):  # none: ImageJ's unit
-        scale = 1.0
+        scale, name = 1.0, imagej_unit(str(imagej.get("unit", "")))
     else:  # inch, TIFF's default
-        scale = 25.4
+        scale, name = 25.4, "mm"
     z = imagej.get("spacing")
     z = z * scale if isinstance(z, (int, float)) and z > 0 else 1.0
-    return (x * scale, y * scale, z)[:ndim]
+    return (x * scale, y * scale, z)[:ndim], name
+
+
+def imagej_unit(unit: str) -> str:
+    """ImageJ's unit names in the short form ``dsc-seg`` gives them."""
+    if unit in ("micron", "\\u00B5m", "\u00b5m", "um"):
+        return "um"
+    return "px" if unit in ("pixel", "") else unit
 
 
 def segment_file(

@@ -37,6 +37,9 @@ const SIGNAL_CHECK: Duration = Duration::from_millis(50);
 struct Options2 {
     #[command(flatten)]
     options: SegmentOptions,
+    /// The length unit of `spacing` (an array has none of its own).
+    #[arg(long)]
+    unit: Option<String>,
 }
 
 /// `segment`'s options in 3D, exactly as `dsc-seg segment3d` takes them.
@@ -45,6 +48,9 @@ struct Options2 {
 struct Options3 {
     #[command(flatten)]
     options: Segment3dOptions,
+    /// The length unit of `spacing` (an array has none of its own).
+    #[arg(long)]
+    unit: Option<String>,
 }
 
 /// Segments a 2D or 3D array; `args` are command-line option arguments.
@@ -61,7 +67,8 @@ fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyRes
                 ));
             }
             let spacing = o.options.spacing().map_err(to_py)?;
-            let image = convert::image(image)?.with_spacing(spacing);
+            let unit = checked_unit(o.unit)?;
+            let image = convert::image(image)?.with_spacing(spacing).with_unit(unit);
             let params = o.options.params(2).map_err(to_py)?;
             let params = with_init_labels(params, o.options.init_labels.as_deref(), image.dims())
                 .map_err(to_py)?;
@@ -74,6 +81,10 @@ fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyRes
             let volume = match o.options.spacing().map_err(to_py)? {
                 Some(spacing) => convert::volume(image)?.respaced(spacing),
                 None => convert::volume(image)?,
+            };
+            let volume = match checked_unit(o.unit)? {
+                Some(unit) => volume.with_unit(&unit),
+                None => volume,
             };
             let params = o.options.params(2).map_err(to_py)?;
             let params = with_init_labels3(params, o.options.init_labels.as_deref(), volume.dims())
@@ -99,6 +110,20 @@ fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyRes
     Ok(Segmentation {
         inner: inner?.map_err(to_py)?,
     })
+}
+
+/// The `unit` keyword: a short ASCII name such as `um` or `mm`, which
+/// every output can store (a TIFF's ImageJ description is ASCII).
+fn checked_unit(unit: Option<String>) -> PyResult<Option<String>> {
+    match unit {
+        Some(u) if u.is_empty() || !u.chars().all(|c| c.is_ascii_graphic()) => {
+            Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "unit {u:?}: expected a length unit such as \"um\" or \"mm\" \
+                 (ASCII, no spaces; \"um\" for µm)"
+            )))
+        }
+        u => Ok(u),
+    }
 }
 
 /// Runs `job` on a thread of its own with the GIL released, looking for a

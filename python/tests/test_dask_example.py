@@ -79,8 +79,11 @@ def test_a_stacks_voxel_size_is_read_as_the_cli_reads_it(tmp_path, cli):
     assert row["status"] == "done", row
     report = json.loads((tmp_path / "out" / "fiji" / "report.json").read_text())
     assert report["frame"]["spacing"] == [0.5, 0.5, 2.5]
-    cli("segment3d", stack, "--phases", 2, "--max-iterations", 15, "--outputs", "labels",
+    cli("segment3d", stack, "--phases", 2, "--max-iterations", 15, "--outputs", "labels,report",
         "--quiet", "--out", tmp_path / "cli")
+    cli_report = json.loads((tmp_path / "cli" / "report.json").read_text())
+    assert report["frame"]["unit"] == cli_report["frame"]["unit"] == "um"
+    assert report["phases"]["unit"] == "um"
     assert np.array_equal(
         tifffile.imread(tmp_path / "out" / "fiji" / "labels.tif"),
         tifffile.imread(tmp_path / "cli" / "labels.tif"),
@@ -110,6 +113,24 @@ def test_a_spacing_option_overrides_the_files(tmp_path):
     assert row["status"] == "done", row
     report = json.loads((tmp_path / "out" / "fiji" / "report.json").read_text())
     assert report["frame"]["spacing"] == [1.0, 1.0, 1.0]
+
+
+def test_a_pngs_pixel_size_is_in_millimetres_as_the_cli_reads_it(tmp_path, cli):
+    from PIL import Image
+
+    example = load_example()
+    image, _ = dsc_seg.phantom("two_phase", size=48, noise=0.1, seed=1)
+    path = tmp_path / "scan.png"
+    Image.fromarray(image).save(path, dpi=(254, 254))  # 0.1 mm pixels
+    row = example.segment_file(str(path), str(tmp_path / "out"), 2, "report", {})
+    assert row["status"] == "done", row
+    cli("segment", path, "--outputs", "report", "--quiet", "--out", tmp_path / "cli")
+    frames = [
+        json.loads((d / "report.json").read_text())["frame"]
+        for d in (tmp_path / "out" / "scan", tmp_path / "cli")
+    ]
+    assert [f["unit"] for f in frames] == ["mm", "mm"]
+    assert frames[0]["spacing"] == pytest.approx(frames[1]["spacing"])
 
 
 def test_a_palette_or_gray_alpha_png_is_read_as_its_gray_values(tmp_path, cli):

@@ -129,6 +129,37 @@ def test_spacing_scales_a_volume():
         dsc_seg.segment(volume, spacing=(1, 0, 1))
 
 
+def test_unit_names_the_length_unit_of_spacing_in_the_report_and_files(tmp_path):
+    """``unit`` is carried where the command line carries a file's unit: the
+    report's frame and measurements, ``labels.tif``'s ImageJ unit and
+    resolution (3D), ``labels.png``'s pHYs (2D, in mm)."""
+    import tifffile
+    from PIL import Image
+
+    volume, _ = dsc_seg.phantom("two_balls", size=16)
+    spaced = dsc_seg.segment(volume, max_iterations=3, spacing=(0.5, 0.5, 2), unit="um")
+    assert spaced.report["frame"]["unit"] == "um"
+    assert spaced.report["phases"]["unit"] == "um"
+    spaced.write(tmp_path / "3d", outputs="labels")
+    with tifffile.TiffFile(tmp_path / "3d" / "labels.tif") as tif:
+        assert tif.imagej_metadata["unit"] == "micron"
+        assert tif.imagej_metadata["spacing"] == 2
+        pixels, length = tif.pages[0].tags["XResolution"].value
+        assert length / pixels == 0.5
+
+    image, _ = dsc_seg.phantom("two_phase", size=64)
+    spaced = dsc_seg.segment(image, max_iterations=5, spacing=(0.25, 0.25), unit="mm")
+    assert spaced.report["frame"]["unit"] == spaced.report["phases"]["unit"] == "mm"
+    spaced.write(tmp_path / "2d", outputs="labels")
+    with Image.open(tmp_path / "2d" / "labels.png") as png:
+        assert png.info["dpi"] == pytest.approx((25.4 / 0.25, 25.4 / 0.25), rel=1e-3)
+    # Without spacing, one pixel is 1 in the unit.
+    unit_pixels = dsc_seg.segment(image, max_iterations=5, unit="um").report["frame"]
+    assert (unit_pixels["unit"], unit_pixels["spacing"][:2]) == ("um", [1.0, 1.0])
+    with pytest.raises(ValueError, match="length unit"):
+        dsc_seg.segment(image, spacing=(0.5, 0.5), unit="\u00b5m")
+
+
 def test_phases_auto_chooses_the_count_of_the_four_phase_phantom():
     image, truth = dsc_seg.phantom("four_phase", size=128)
     r = dsc_seg.segment(image, phases="auto", max_phases=6)

@@ -95,6 +95,7 @@ pub struct Image2 {
     sample_type: SampleType,
     colour: Colour,
     spacing: Option<[f64; 2]>,
+    unit: Option<String>,
     placement: Option<Box<Placement>>,
     transparency: Transparency,
 }
@@ -190,6 +191,7 @@ impl Image2 {
             sample_type: SampleType::Float,
             colour: Colour::Gray,
             spacing: None,
+            unit: None,
             placement: None,
             transparency: Transparency::default(),
         }
@@ -211,6 +213,7 @@ impl Image2 {
             sample_type: SampleType::Float,
             colour: Colour::Gray,
             spacing: None,
+            unit: None,
             placement: None,
             transparency: Transparency::default(),
         }
@@ -320,6 +323,7 @@ impl Image2 {
             sample_type,
             colour: Colour::Gray,
             spacing: None,
+            unit: None,
             placement: None,
             transparency: Transparency::default(),
         })
@@ -400,6 +404,7 @@ impl Image2 {
             sample_type,
             colour: Colour::Channel(k),
             spacing: None,
+            unit: None,
             placement: None,
             transparency,
         })
@@ -465,6 +470,7 @@ impl Image2 {
             sample_type,
             colour,
             spacing: None,
+            unit: None,
             placement: None,
             transparency,
         })
@@ -489,6 +495,19 @@ impl Image2 {
     /// The image with the given pixel size (see [`Image2::spacing`]).
     pub fn with_spacing(mut self, spacing: Option<[f64; 2]>) -> Self {
         self.spacing = spacing;
+        self
+    }
+
+    /// The length unit given for the image's pixel size, overriding the
+    /// file's (an array's, which has none); `None` keeps the file's, or
+    /// `"unit"` for a size given to an image without one.
+    pub fn unit(&self) -> Option<&str> {
+        self.unit.as_deref()
+    }
+
+    /// The image with the given length unit (see [`Image2::unit`]).
+    pub fn with_unit(mut self, unit: Option<String>) -> Self {
+        self.unit = unit;
         self
     }
 

@@ -494,10 +494,13 @@ pub(crate) fn segment_image_then<T>(
         (None, Source::File(path)) => image_frame(path, w, h),
         (None, _) => Frame::image_rows_up(w, h, [1.0, 1.0], "px"),
     };
-    let frame = match image.spacing() {
+    let mut frame = match image.spacing() {
         Some([sx, sy]) => frame.respaced([sx, sy, frame.spacing[2]]),
         None => frame,
     };
+    if let Some(unit) = image.unit() {
+        frame.unit = unit.to_string();
+    }
     let order = seg.phase_order();
     let measurements =
         Measurements::from_labels(&labels, image.data(), intensity, &frame, params.phases)
