@@ -473,6 +473,11 @@ impl Overlay<'_> {
             let mut paint = Paint::default();
             let [r, g, b] = phase_color(phase);
             paint.set_color_rgba8(r, g, b, (self.fill_alpha * 255.0).round() as u8);
+            // Not anti-aliased: the interface strokes drawn over it cover
+            // every edge of a phase's fill. Anti-aliasing the fills took a
+            // third of a 512² overlay's rendering and changed 0.4 % of its
+            // pixels by at most 9 of 765 levels.
+            paint.anti_alias = false;
             pixmap.fill_path(&path, &paint, tiny_skia::FillRule::Winding, t, None);
         }
     }
