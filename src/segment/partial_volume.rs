@@ -194,28 +194,55 @@ pub fn phase_plateaus(
 /// estimates are independent whole-image passes, taken on rayon's threads
 /// (each with its own copy of the labels); they are most of the time the
 /// measurements take after a run, more than the 2D segmentation itself on a
-/// 512² four-phase image.
+/// 512² four-phase image. With two phases, growing one is shrinking the
+/// other (a pixel of phase 1 next to phase 0 goes to 0 either way), so two
+/// passes give all four estimates.
 fn one_pixel_shift(labels: &[u8], image: &Intensities, phases: usize) -> Vec<f64> {
     let sets = window_sets(labels, image.dims, phases);
-    let moved_estimate = |(p, grow): (usize, bool)| {
-        let mut moved = vec![0u8; labels.len()];
-        if grow {
-            grown_into(labels, &sets, p as u8, &mut moved);
-        } else {
-            shrunk_into(labels, &sets, p as u8, &mut moved);
-        }
-        noise_only(&moved, image, phases).measure[p]
-    };
+    if phases == 2 {
+        let (grown_0, shrunk_0) = rayon::join(
+            || moved_measures(labels, &sets, image, 2, (0, true)),
+            || moved_measures(labels, &sets, image, 2, (0, false)),
+        );
+        // phase 1 grown is phase 0 shrunk, and the other way round
+        return vec![
+            0.5 * (grown_0[0] - shrunk_0[0]).abs(),
+            0.5 * (shrunk_0[1] - grown_0[1]).abs(),
+        ];
+    }
+    each_phase_shift(labels, &sets, image, phases)
+}
+
+/// [`one_pixel_shift`] with a pass for each phase grown and each shrunk.
+fn each_phase_shift(labels: &[u8], sets: &[u16], image: &Intensities, phases: usize) -> Vec<f64> {
     let estimates: Vec<f64> = (0..phases)
         .flat_map(|p| [(p, true), (p, false)])
         .collect::<Vec<_>>()
         .into_par_iter()
-        .map(moved_estimate)
+        .map(|(p, grow)| moved_measures(labels, sets, image, phases, (p, grow))[p])
         .collect();
     estimates
         .chunks_exact(2)
         .map(|pair| 0.5 * (pair[0] - pair[1]).abs())
         .collect()
+}
+
+/// The estimate of each of `phases` phases (noise share only) with phase
+/// `p` grown (`grow`) or shrunk by one pixel.
+fn moved_measures(
+    labels: &[u8],
+    sets: &[u16],
+    image: &Intensities,
+    phases: usize,
+    (p, grow): (usize, bool),
+) -> Vec<f64> {
+    let mut moved = vec![0u8; labels.len()];
+    if grow {
+        grown_into(labels, sets, p as u8, &mut moved);
+    } else {
+        shrunk_into(labels, sets, p as u8, &mut moved);
+    }
+    noise_only(&moved, image, phases).measure
 }
 
 /// Each pixel's set of labels (one bit each) within one pixel of it.
@@ -695,6 +722,21 @@ mod tests {
             })
             .collect();
         (labels, values, [nx, ny, 1])
+    }
+
+    #[test]
+    fn two_phases_take_their_four_shifted_estimates_from_two_passes() {
+        let (mut labels, values, dims) = noisy_stripes(0.3, 0.7, 0.1, 3);
+        // ragged edges, so that growing and shrinking move different pixels
+        for i in (0..labels.len()).step_by(37) {
+            labels[i] ^= 1;
+        }
+        let image = Intensities::new(&values, dims, Limits::detect(&values));
+        let sets = window_sets(&labels, dims, 2);
+        let shortcut = one_pixel_shift(&labels, &image, 2);
+        let every_pass = each_phase_shift(&labels, &sets, &image, 2);
+        assert!(shortcut[0] > 0.0 && shortcut[1] > 0.0, "{shortcut:?}");
+        assert_eq!(shortcut, every_pass);
     }
 
     #[test]
