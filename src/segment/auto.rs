@@ -218,7 +218,10 @@ fn shared_plateau(
     phases: usize,
     tolerance: f64,
 ) -> Option<String> {
-    let plateaus = phase_plateaus(labels, image.data, image.dims, phases);
+    let plateaus: Vec<Option<f64>> = phase_plateaus(labels, image.data, image.dims, phases)
+        .iter()
+        .map(|p| p.map(|p| p.mean))
+        .collect();
     // The darkest and the brightest phase (labels rank the phases by mean)
     // cannot be blurred copies of others: blur mixes towards the middle.
     let between = |k: usize| k > 0 && k + 1 < phases;

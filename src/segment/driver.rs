@@ -20,8 +20,8 @@ use super::params::{
 use super::partial_volume::phase_plateaus;
 use super::raster::Raster;
 use super::reseed::{
-    any_lost, lost_phases, merge_phase, plateau_twins, split_most_structured_phase, vestiges,
-    LostPhase,
+    any_lost, lost_phases, merge_phase, plateau_twins, speckled_pairs, split_most_structured_phase,
+    vestiges, LostPhase,
 };
 use super::reseed_trial::{ReseedTrial, RunProgress};
 use super::smoothing::force_smoothing;
@@ -1136,7 +1136,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
 
     /// The present phases not in `listed` whose plateau another phase shares
     /// within the duplicate tolerance ([`plateau_twins`]; a pass over the
-    /// label image at the end of a run), the smaller of each pair: the mean
+    /// label image at the end of a run), or that are specks of one region
+    /// with another, neither with a measured plateau ([`speckled_pairs`]),
+    /// the smaller of each pair: the mean
     /// test during the run misses a region that noise divides, whose halves'
     /// means differ by about a third of the noise. Only asked when two
     /// present phases' means are closer than the noise: the halves of a
@@ -1154,17 +1156,46 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
         let labels = self.label_image_with(&order);
         let plateaus = phase_plateaus(&labels, self.image.data, self.image.dims, order.len());
+        let means: Vec<Option<f64>> = plateaus.iter().map(|p| p.map(|p| p.mean)).collect();
+        let samples: Vec<usize> = plateaus
+            .iter()
+            .map(|p| p.map_or(0, |p| p.samples))
+            .collect();
+        let rank_means: Vec<Option<f64>> = label_of_rank
+            .iter()
+            .map(|&l| self.phases.mean[l as usize].filter(|_| self.phases.count[l as usize] > 0))
+            .collect();
+        let tolerance = self.duplicate_tolerance();
         let count = |l: Label| self.phases.count[l as usize];
-        plateau_twins(&plateaus, self.duplicate_tolerance())
+        let smaller_first = |(a, b): (Label, Label)| {
+            if count(a) <= count(b) {
+                (a, b)
+            } else {
+                (b, a)
+            }
+        };
+        let shared = plateau_twins(&means, tolerance)
             .into_iter()
             .map(|(a, b)| (label_of_rank[a], label_of_rank[b]))
             .filter(|&(a, b)| count(a) > 0 && count(b) > 0)
-            .map(|(a, b)| {
-                let (phase, twin) = if count(a) <= count(b) { (a, b) } else { (b, a) };
+            .map(|pair| {
+                let (phase, twin) = smaller_first(pair);
                 LostPhase::SharedPlateau { phase, twin }
-            })
-            .filter(|s| !listed.iter().any(|l| l.label() == s.label()))
-            .collect()
+            });
+        let speckled = speckled_pairs(&rank_means, &samples, self.intensity.noise, tolerance)
+            .into_iter()
+            .map(|(a, b)| {
+                let (phase, twin) = smaller_first((label_of_rank[a], label_of_rank[b]));
+                LostPhase::Speckled { phase, twin }
+            });
+        let mut found: Vec<LostPhase> = Vec::new();
+        for lost in shared.chain(speckled) {
+            let taken = |l: &LostPhase| l.label() == lost.label();
+            if !listed.iter().any(taken) && !found.iter().any(taken) {
+                found.push(lost);
+            }
+        }
+        found
     }
 
     /// Merges each duplicate phase, and each band along the edge between two

@@ -168,6 +168,16 @@ fn with_limits(
     estimate
 }
 
+/// A phase's plateau intensity and how many pixels/voxels it was taken over.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlateauMean {
+    /// The mean intensity.
+    pub mean: f64,
+    /// Pixels/voxels it was taken over (at most [`PLATEAU_SAMPLES`], unless
+    /// one layer holds more).
+    pub samples: usize,
+}
+
 /// The plateau intensity of each phase of `labels` (as in
 /// [`partial_volume`]): the mean over its pixels beyond the band, deepest
 /// first; `None` for a phase without such pixels (or with more than
@@ -177,14 +187,19 @@ pub fn phase_plateaus(
     values: &[f32],
     dims: [usize; 3],
     phases: usize,
-) -> Vec<Option<f64>> {
+) -> Vec<Option<PlateauMean>> {
     if !(2..=MAX_PHASES).contains(&phases) {
         return vec![None; phases];
     }
     let (_, depth) = band_and_depth(labels, dims, phases);
     plateaus(labels, values, &depth, phases, &Limits::NONE)
         .iter()
-        .map(|p| p.map(|p| p.mean))
+        .map(|p| {
+            p.map(|p| PlateauMean {
+                mean: p.mean,
+                samples: p.samples,
+            })
+        })
         .collect()
 }
 

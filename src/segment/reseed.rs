@@ -78,6 +78,19 @@ pub enum LostPhase {
         /// The phase whose plateau it shares.
         twin: Label,
     },
+    /// The phase and its twin are specks: their means are closer than the
+    /// noise and neither has enough pixels or voxels beyond the blur of its
+    /// edges to measure a plateau ([`speckled_pairs`]), so nothing shows two
+    /// regions rather than one that noise divides. Cells of a few voxels
+    /// split a flat 3D volume so: each piece holds the side of the noise
+    /// its cells' means took, to its centre. Reported at the end of a run,
+    /// never re-seeded.
+    Speckled {
+        /// The smaller of the two phases.
+        phase: Label,
+        /// The other.
+        twin: Label,
+    },
 }
 
 impl LostPhase {
@@ -89,7 +102,8 @@ impl LostPhase {
             | LostPhase::Band { phase: l, .. }
             | LostPhase::Vestige { phase: l, .. }
             | LostPhase::Absorbed { phase: l, .. }
-            | LostPhase::SharedPlateau { phase: l, .. } => l,
+            | LostPhase::SharedPlateau { phase: l, .. }
+            | LostPhase::Speckled { phase: l, .. } => l,
         }
     }
 
@@ -142,6 +156,14 @@ impl LostPhase {
                 format!(
                     "phases {lo} and {hi} have the same intensity away from their edges, \
                      within the noise: one region divided by noise or blur, not two"
+                )
+            }
+            LostPhase::Speckled { phase: a, twin: b } => {
+                let (lo, hi) = (phase(a).min(phase(b)), phase(a).max(phase(b)));
+                format!(
+                    "phases {lo} and {hi} are specks with means closer than the noise and \
+                     no pixel or voxel away from their edges to tell them apart: one region \
+                     divided by noise, not two"
                 )
             }
         }
@@ -222,6 +244,45 @@ pub fn plateau_twins(plateaus: &[Option<f64>], tolerance: f64) -> Vec<(usize, us
         }
     }
     twins
+}
+
+/// The pairs of present phases (adjacent by their `means`, indexed as
+/// `plateau_samples`) that nothing shows to be two regions: their means
+/// differ by less than the `noise`, and neither has a plateau measured well
+/// enough to compare within the duplicate `tolerance` ([`plateau_twins`]):
+/// at most `(2·noise/tolerance)²` pixels or voxels beyond the blur of its
+/// edges, where the plateau's standard error `noise/√n` exceeds half the
+/// tolerance. A region's plateau needs seven pixels or voxels across;
+/// regions that thin with a contrast under the noise are specks of it.
+/// Each phase in at most one pair.
+pub fn speckled_pairs(
+    means: &[Option<f64>],
+    plateau_samples: &[usize],
+    noise: f64,
+    tolerance: f64,
+) -> Vec<(usize, usize)> {
+    let measured = |k: usize| {
+        let n = plateau_samples[k] as f64;
+        n > 0.0 && noise / n.sqrt() <= 0.5 * tolerance
+    };
+    let mut sorted: Vec<(f64, usize)> = means
+        .iter()
+        .enumerate()
+        .filter_map(|(k, m)| m.map(|m| (m, k)))
+        .collect();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut pairs = Vec::new();
+    let mut i = 0;
+    while i + 1 < sorted.len() {
+        let ((ma, a), (mb, b)) = (sorted[i], sorted[i + 1]);
+        if mb - ma < noise && !measured(a) && !measured(b) {
+            pairs.push((a, b));
+            i += 2;
+        } else {
+            i += 1;
+        }
+    }
+    pairs
 }
 
 /// The phases present in fewer pixels or voxels than `cell` (one regular
@@ -372,6 +433,17 @@ mod tests {
         assert_eq!(plateau_twins(&plateaus, 0.015), vec![(3, 4)]);
         assert!(plateau_twins(&plateaus, 0.01).is_empty());
         assert!(plateau_twins(&[Some(0.5), None], 1.0).is_empty());
+    }
+
+    /// Specks: means within the noise, no plateau measured to half the
+    /// tolerance (σ 0.1, tolerance 0.03: 45 samples and more measure one).
+    #[test]
+    fn speckled_pairs_need_close_means_and_no_measured_plateau() {
+        let means = [Some(0.46), Some(0.52), Some(0.9)];
+        assert_eq!(speckled_pairs(&means, &[8, 0, 0], 0.1, 0.03), vec![(0, 1)]);
+        assert!(speckled_pairs(&means, &[45, 0, 0], 0.1, 0.03).is_empty());
+        assert!(speckled_pairs(&means, &[8, 0, 0], 0.05, 0.03).is_empty());
+        assert!(speckled_pairs(&[Some(0.46), None], &[0, 0], 0.1, 0.03).is_empty());
     }
 
     /// A phase of one voxel is a vestige where a cell holds more; an empty

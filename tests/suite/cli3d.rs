@@ -559,3 +559,36 @@ fn colour_slices_are_refused_and_gray_rgb_slices_read() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// A volume of pure noise asked for two phases splits into specks of its
+/// noise (cells of a few voxels follow the noise averaged over them, to
+/// the pieces' centres): the run says the two are one region, on stderr
+/// and in report.json, as a flat image's run does in 2D.
+#[test]
+fn a_flat_noisy_volume_split_in_two_is_said_to_be_one_region() {
+    let d = tmp();
+    let n = 24;
+    let mut noise = vec![0.5f32; n * n * n];
+    dsc_seg::phantom::noise::add_gaussian_noise(&mut noise, 0.1, 1);
+    let p = d.path().join("flat.nii.gz");
+    save_nifti(&p, &Volume::from_raw(n, n, n, noise)).unwrap();
+    let out = d.path().join("o");
+    let o = bin()
+        .arg("segment3d")
+        .arg(&p)
+        .args(["--phases", "2", "--outputs", "report", "--quiet", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let said = "phases 0 and 1 are specks with means closer than the noise";
+    assert!(stderr.contains(&format!("warning: {said}")), "{stderr}");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let warnings = report["warnings"].as_array().unwrap();
+    assert!(
+        warnings.iter().any(|w| w.as_str().unwrap().contains(said)),
+        "{warnings:?}"
+    );
+}
