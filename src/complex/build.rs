@@ -3,7 +3,7 @@
 
 use super::bookkeeping::Bookkeeping;
 use super::cavity::{facet_key, FacetKey};
-use super::{CellId, Complex, Label, VertexClass, VertexId, VertexKind};
+use super::{CellId, Complex, Label, Slot, VertexClass, VertexId, VertexKind};
 use crate::dim::{Dim, Point, D2, D3};
 use nalgebra::{Vector2, Vector3};
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
@@ -101,7 +101,7 @@ impl<K: Dim> Complex<K> {
         let mut vertex_cell = vec![None; points.len()];
         for (ci, cell) in cells.iter().enumerate() {
             for &v in cell.as_ref() {
-                vertex_cell[v.index()] = Some(CellId(ci as u32));
+                vertex_cell[v.index()] = Some(CellId::new(ci as u32));
             }
         }
         let live_vertices = vertex_cell.iter().filter(|c| c.is_some()).count();
@@ -116,8 +116,11 @@ impl<K: Dim> Complex<K> {
                 };
                 n_points
             ],
-            cells,
-            neighbours,
+            slots: cells
+                .into_iter()
+                .zip(neighbours)
+                .map(|(corners, neighbours)| Slot::new(corners, neighbours))
+                .collect(),
             labels,
             alive: vec![true; n_cells],
             live_cells: n_cells,
@@ -173,8 +176,8 @@ fn glue_facets<K: Dim>(
         match run {
             [_] => {}
             [(_, a, i), (_, b, j)] => {
-                neighbours[*a as usize].as_mut()[*i as usize] = Some(CellId(*b));
-                neighbours[*b as usize].as_mut()[*j as usize] = Some(CellId(*a));
+                neighbours[*a as usize].as_mut()[*i as usize] = Some(CellId::new(*b));
+                neighbours[*b as usize].as_mut()[*j as usize] = Some(CellId::new(*a));
             }
             _ => return Err(BuildError::NonManifold(run[2].1 as usize)),
         }
@@ -548,8 +551,11 @@ mod tests {
                     let reference = delaunay(&points, domain);
                     let direct = Complex::rectangle(w, h, l).unwrap();
                     assert_eq!(direct.positions, reference.positions, "{w}×{h}, L {l}");
-                    assert_eq!(direct.cells, reference.cells, "{w}×{h}, L {l}");
-                    assert_eq!(cells.len(), reference.cells.len());
+                    let corners = |c: &Complex<D2>| -> Vec<_> {
+                        c.slots.iter().map(|slot| slot.corners).collect()
+                    };
+                    assert_eq!(corners(&direct), corners(&reference), "{w}×{h}, L {l}");
+                    assert_eq!(cells.len(), reference.slots.len());
                     compared += 1;
                 }
             }

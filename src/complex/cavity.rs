@@ -8,7 +8,7 @@
 //! link condition shows up here as an unmatched or over-matched facet, so no
 //! operation can silently break the complex.
 
-use super::{CellId, Complex, Label, VertexId};
+use super::{CellId, Complex, Label, Slot, VertexId};
 use crate::dim::{Dim, Point};
 use serde::Serialize;
 use smallvec::SmallVec;
@@ -219,7 +219,7 @@ impl<K: Dim> Complex<K> {
         facets.sort_unstable_by_key(|e| e.0);
         let mut links: SmallVec<[K::Neighbours; INLINE / 2]> =
             SmallVec::from_elem(K::no_neighbours(), new.len());
-        let base = self.cells.len() as u32;
+        let base = self.slots.len() as u32;
         // (new j, local i, outside index)
         let mut external: SmallVec<[(usize, usize, usize); INLINE]> = SmallVec::new();
         let mut k = 0;
@@ -246,8 +246,8 @@ impl<K: Dim> Complex<K> {
                     if j1 == j2 {
                         return Err(Rejection::NonManifold);
                     }
-                    links[j1].as_mut()[i1] = Some(CellId(base + j2 as u32));
-                    links[j2].as_mut()[i2] = Some(CellId(base + j1 as u32));
+                    links[j1].as_mut()[i1] = Some(CellId::new(base + j2 as u32));
+                    links[j2].as_mut()[i2] = Some(CellId::new(base + j1 as u32));
                 }
                 _ => return Err(Rejection::NonManifold),
             }
@@ -270,7 +270,8 @@ impl<K: Dim> Complex<K> {
                 let local = (0..K::NV)
                     .find(|&l| facet_key(self.cell(nb), l) == key)
                     .expect("outside cell shares the facet");
-                self.neighbours[nb.index()].as_mut()[local] = Some(CellId(base + j as u32));
+                self.slots[nb.index()].neighbours.as_mut()[local] =
+                    Some(CellId::new(base + j as u32));
             }
         }
         for (key, a, b) in glued {
@@ -279,14 +280,13 @@ impl<K: Dim> Complex<K> {
                     let local = (0..K::NV)
                         .find(|&l| facet_key(self.cell(cell), l) == key)
                         .expect("glued cell has the facet");
-                    self.neighbours[cell.index()].as_mut()[local] = other;
+                    self.slots[cell.index()].neighbours.as_mut()[local] = other;
                 }
             }
         }
         for (j, (cell, label)) in new.iter().enumerate() {
-            let id = CellId(base + j as u32);
-            self.cells.push(*cell);
-            self.neighbours.push(links[j]);
+            let id = CellId::new(base + j as u32);
+            self.slots.push(Slot::new(*cell, links[j]));
             self.labels.push(*label);
             self.alive.push(true);
             self.mark_star_changed(id);
@@ -301,11 +301,11 @@ impl<K: Dim> Complex<K> {
         // Vertices whose recorded cell died and that no new cell uses.
         for &c in old {
             for i in 0..K::NV {
-                let v = self.cells[c.index()].as_ref()[i];
+                let v = self.slots[c.index()].corners.as_ref()[i];
                 if self.vertex_cell[v.index()].is_some_and(|vc| !self.alive[vc.index()]) {
                     let replacement = old
                         .iter()
-                        .flat_map(|&o| self.neighbours[o.index()].as_ref().iter().flatten())
+                        .flat_map(|&o| self.slots[o.index()].neighbours.as_ref().iter().flatten())
                         .copied()
                         .find(|&n| self.alive[n.index()] && self.cell(n).contains(&v));
                     if replacement.is_none() {
@@ -318,7 +318,7 @@ impl<K: Dim> Complex<K> {
         match reclassify {
             Reclassify::AllCorners => {
                 let fresh: SmallVec<[CellId; INLINE / 2]> =
-                    (base..base + new.len() as u32).map(CellId).collect();
+                    (base..base + new.len() as u32).map(CellId::new).collect();
                 self.reclassify_cells(&fresh);
             }
             Reclassify::NewVertices => {
@@ -327,7 +327,7 @@ impl<K: Dim> Complex<K> {
                     .flat_map(|(cell, _)| cell.as_ref().iter().copied())
                     .filter(|v| {
                         !old.iter()
-                            .any(|&c| self.cells[c.index()].as_ref().contains(v))
+                            .any(|&c| self.slots[c.index()].corners.as_ref().contains(v))
                     })
                     .collect();
                 self.reclassify_vertices(&mut added);

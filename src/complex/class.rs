@@ -130,10 +130,10 @@ impl<K: Dim> Complex<K> {
     /// The neighbours of `c` across its two edges through `v`, leaving out `except`.
     #[inline]
     fn fan_sides(&self, c: CellId, v: VertexId, except: Option<CellId>) -> [Option<CellId>; 2] {
-        let verts = self.cells[c.index()].as_ref();
+        let verts = self.slots[c.index()].corners.as_ref();
         let mut out = [None; 2];
         let mut k = 0;
-        for (i, &nb) in self.neighbours[c.index()].as_ref().iter().enumerate() {
+        for (i, &nb) in self.slots[c.index()].neighbours.as_ref().iter().enumerate() {
             if verts[i] != v && k < 2 {
                 out[k] = nb.filter(|&n| Some(n) != except);
                 k += 1;
@@ -161,7 +161,7 @@ impl<K: Dim> Complex<K> {
                 let label = self.labels[c.index()];
                 for (local, nb) in self.neighbours(c).iter().enumerate() {
                     let Some(nb) = nb else { continue };
-                    if self.cells[c.index()].as_ref()[local] == v
+                    if self.slots[c.index()].corners.as_ref()[local] == v
                         || self.labels[nb.index()] != label
                     {
                         continue;
@@ -200,7 +200,7 @@ impl<K: Dim> Complex<K> {
             // vertices, taken in id order by a mark each rather than sorted)
             let mut corner = vec![false; self.vertex_capacity()];
             for &c in cells.iter().filter(|&&c| self.is_alive(c)) {
-                for v in self.cells[c.index()].as_ref() {
+                for v in self.slots[c.index()].corners.as_ref() {
                     corner[v.index()] = true;
                 }
             }
@@ -214,7 +214,7 @@ impl<K: Dim> Complex<K> {
         let mut corners: SmallVec<[VertexId; 128]> = cells
             .iter()
             .filter(|&&c| self.is_alive(c))
-            .flat_map(|&c| self.cells[c.index()].as_ref().iter().copied())
+            .flat_map(|&c| self.slots[c.index()].corners.as_ref().iter().copied())
             .collect();
         self.reclassify_vertices(&mut corners);
     }

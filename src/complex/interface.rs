@@ -55,12 +55,12 @@ impl<K: Dim> InterfaceFacets<'_, K> {
     #[inline]
     fn next_facet(&mut self) -> Option<(CellId, usize, Label)> {
         let cx = self.complex;
-        while self.cell < cx.cells.len() {
+        while self.cell < cx.slots.len() {
             let c = self.cell;
             if cx.alive[c] {
                 if let Some((i, b)) = cx.next_interface_facet(c, self.next_local) {
                     self.next_local = i + 1;
-                    return Some((CellId(c as u32), i, b));
+                    return Some((CellId::new(c as u32), i, b));
                 }
             }
             self.cell += 1;
@@ -100,7 +100,7 @@ impl<K: Dim> Complex<K> {
     #[inline]
     fn next_interface_facet(&self, c: usize, from: usize) -> Option<(usize, Label)> {
         let own = self.labels[c];
-        let neighbours = self.neighbours[c].as_ref();
+        let neighbours = self.slots[c].neighbours.as_ref();
         (from..K::NV).find_map(|i| {
             let nb = neighbours[i]?;
             let other = self.labels[nb.index()];

@@ -23,7 +23,7 @@ impl<K: Dim> Complex<K> {
 
     /// Number of connected components (through shared facets) of the cells labelled `label`.
     pub fn components(&self, label: Label) -> usize {
-        let mut seen = vec![false; self.cells.len()];
+        let mut seen = vec![false; self.cell_capacity()];
         let mut stack: Vec<CellId> = Vec::new();
         let mut count = 0;
         for c in self.cell_ids() {

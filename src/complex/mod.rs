@@ -17,6 +17,7 @@ mod junction;
 mod measure;
 mod reorder;
 mod seen;
+mod slot;
 mod stretch;
 #[cfg(feature = "tetgen")]
 pub mod surface;
@@ -33,6 +34,7 @@ pub use validate::Finding;
 
 use crate::dim::{Dim, Point, D2, D3};
 use bookkeeping::Bookkeeping;
+use slot::Slot;
 
 /// A labelled simplicial complex filling an axis-aligned box (the image domain).
 ///
@@ -48,8 +50,8 @@ pub struct Complex<K: Dim> {
     /// One incident live cell per vertex; `None` for a removed vertex.
     vertex_cell: Vec<Option<CellId>>,
     classes: Vec<VertexClass>,
-    cells: Vec<K::Cell>,
-    neighbours: Vec<K::Neighbours>,
+    /// Per cell id: its corners and neighbours (one record, see [`Slot`]).
+    slots: Vec<Slot<K>>,
     labels: Vec<Label>,
     alive: Vec<bool>,
     live_cells: usize,
@@ -78,12 +80,12 @@ impl<K: Dim> Complex<K> {
     /// Vertices of a cell.
     #[inline]
     pub fn cell(&self, c: CellId) -> &[VertexId] {
-        self.cells[c.index()].as_ref()
+        self.slots[c.index()].corners.as_ref()
     }
     /// Neighbours of a cell, opposite each local vertex.
     #[inline]
     pub fn neighbours(&self, c: CellId) -> &[Option<CellId>] {
-        self.neighbours[c.index()].as_ref()
+        self.slots[c.index()].neighbours.as_ref()
     }
     /// Phase label of a cell.
     #[inline]
@@ -119,12 +121,12 @@ impl<K: Dim> Complex<K> {
     }
     /// Upper bound of cell ids (length of per-cell arrays).
     pub fn cell_capacity(&self) -> usize {
-        self.cells.len()
+        self.slots.len()
     }
     /// Live cell ids.
     pub fn cell_ids(&self) -> impl Iterator<Item = CellId> + '_ {
-        (0..self.cells.len() as u32)
-            .map(CellId)
+        (0..self.slots.len() as u32)
+            .map(CellId::new)
             .filter(|c| self.alive[c.index()])
     }
     /// Per cell id, in order: the cell's label, `None` for a dead cell. Zipped
@@ -424,7 +426,7 @@ impl<K: Dim> Complex<K> {
     pub(crate) fn mark_star_changed(&mut self, c: CellId) {
         let clock = self.book.move_clock;
         for k in 0..K::NV {
-            let w = self.cells[c.index()].as_ref()[k];
+            let w = self.slots[c.index()].corners.as_ref()[k];
             self.book.star_changed_at[w.index()] = clock;
         }
     }
@@ -512,7 +514,7 @@ impl<K: Dim> Complex<K> {
         });
         let ordered = self.ordered_survivors(kept_cells);
         let cells = (self.alive.len(), kept_cells);
-        let m = renumber(&mut cmap, cells, CellId, |i| self.alive[i]);
+        let m = renumber(&mut cmap, cells, CellId::new, |i| self.alive[i]);
         let kept = (kept_vertices, kept_cells);
         self.carry_vertices(&vmap, &cmap, kept, n as usize);
         self.carry_cells(&vmap, &cmap, kept, m as usize);
@@ -585,13 +587,13 @@ impl<K: Dim> Complex<K> {
         let vertices_moved = kept_vertices < vmap.len();
         for i in 0..kept_cells {
             if vertices_moved {
-                for v in self.cells[i].as_mut() {
+                for v in self.slots[i].corners.as_mut() {
                     if v.index() >= kept_vertices {
                         *v = vmap[v.index()].expect("live cell references a live vertex");
                     }
                 }
             }
-            for nb in self.neighbours[i].as_mut() {
+            for nb in self.slots[i].neighbours.as_mut() {
                 if let Some(c) = *nb {
                     if c.index() >= kept_cells {
                         *nb = cmap[c.index()];
@@ -602,21 +604,18 @@ impl<K: Dim> Complex<K> {
         for (i, new) in cmap.iter().enumerate().skip(kept_cells) {
             if let Some(new) = *new {
                 let k = new.index();
-                let mut cell = self.cells[i];
-                for v in cell.as_mut() {
+                let mut slot = self.slots[i];
+                for v in slot.corners.as_mut() {
                     *v = vmap[v.index()].expect("live cell references a live vertex");
                 }
-                self.cells[k] = cell;
-                let mut nb = self.neighbours[i];
-                for c in nb.as_mut() {
+                for c in slot.neighbours.as_mut() {
                     *c = c.and_then(|c| cmap[c.index()]);
                 }
-                self.neighbours[k] = nb;
+                self.slots[k] = slot;
                 self.labels[k] = self.labels[i];
             }
         }
-        self.cells.truncate(m);
-        self.neighbours.truncate(m);
+        self.slots.truncate(m);
         self.labels.truncate(m);
         self.alive.truncate(m);
         self.alive[kept_cells.min(m)..].fill(true);
@@ -686,12 +685,12 @@ mod tests {
         let mut c = Complex::<D2>::rectangle(40.0, 32.0, 4.0).unwrap();
         c.label_by(|p| u32::from(p.x > 21.0));
         let middle = c.cell_count() / 2;
-        let [u, v, ..] = *c.cell(CellId(middle as u32)) else {
+        let [u, v, ..] = *c.cell(CellId::new(middle as u32)) else {
             unreachable!()
         };
         c.collapse_edge(u, v, crate::ops::CollapseMode::Unsafe, 0.0, 1.0)
             .unwrap();
-        let last = CellId(c.cell_capacity() as u32 - 1);
+        let last = CellId::new(c.cell_capacity() as u32 - 1);
         let [a, b, ..] = *c.cell(last) else {
             unreachable!()
         };
@@ -715,7 +714,7 @@ mod tests {
                 &|i| c.is_vertex_alive(VertexId(i as u32)),
                 c.vertex_capacity(),
             );
-            let crank = rank(&|i| c.is_alive(CellId(i as u32)), c.cell_capacity());
+            let crank = rank(&|i| c.is_alive(CellId::new(i as u32)), c.cell_capacity());
             let expected: Vec<_> = c
                 .cell_ids()
                 .map(|x| {
@@ -738,8 +737,11 @@ mod tests {
                 .cell_ids()
                 .map(|x| {
                     let corners: Vec<u32> = c.cell(x).iter().map(|w| w.0).collect();
-                    let neighbours: Vec<Option<u32>> =
-                        c.neighbours(x).iter().map(|nb| nb.map(|nb| nb.0)).collect();
+                    let neighbours: Vec<Option<u32>> = c
+                        .neighbours(x)
+                        .iter()
+                        .map(|nb| nb.map(|nb| nb.raw()))
+                        .collect();
                     (corners, neighbours, c.label(x))
                 })
                 .collect();

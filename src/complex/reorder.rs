@@ -11,7 +11,7 @@
 //! close in space are close in memory again. The order depends on the
 //! mesh alone (ties broken by the old ids), never on the thread count.
 
-use super::{CellId, Complex, VertexId};
+use super::{CellId, Complex, Slot, VertexId};
 use crate::dim::Dim;
 
 /// Renumber once more than `1 / REORDER_SHARE` of the live cells were
@@ -77,7 +77,7 @@ impl<K: Dim> Complex<K> {
             *v = VertexId(new_vertex[v.index()]);
         }
         for c in self.book.last_cell_map.iter_mut().flatten() {
-            *c = CellId(new_cell[c.index()]);
+            *c = CellId::new(new_cell[c.index()]);
         }
     }
 
@@ -108,25 +108,26 @@ impl<K: Dim> Complex<K> {
     /// (ties by id): a counting sort, so the cells around a vertex follow
     /// one another as the vertices do.
     fn cells_by_lowest_corner(&self, new_vertex: &[u32]) -> Vec<u32> {
-        let lowest = |cell: &K::Cell| {
-            cell.as_ref()
+        let lowest = |slot: &Slot<K>| {
+            slot.corners
+                .as_ref()
                 .iter()
                 .map(|v| new_vertex[v.index()])
                 .min()
                 .expect("a cell has corners") as usize
         };
         let mut start = vec![0u32; new_vertex.len() + 1];
-        for cell in &self.cells {
-            start[lowest(cell) + 1] += 1;
+        for slot in &self.slots {
+            start[lowest(slot) + 1] += 1;
         }
         for i in 1..start.len() {
             start[i] += start[i - 1];
         }
-        let mut order = vec![0u32; self.cells.len()];
-        for (i, cell) in self.cells.iter().enumerate() {
-            let slot = &mut start[lowest(cell)];
-            order[*slot as usize] = i as u32;
-            *slot += 1;
+        let mut order = vec![0u32; self.slots.len()];
+        for (i, slot) in self.slots.iter().enumerate() {
+            let place = &mut start[lowest(slot)];
+            order[*place as usize] = i as u32;
+            *place += 1;
         }
         order
     }
@@ -138,24 +139,21 @@ impl<K: Dim> Complex<K> {
         self.book.moved_at = gather_from(&self.book.moved_at, order);
         self.book.star_changed_at = gather_from(&self.book.star_changed_at, order);
         self.vertex_cell = gather_mapped(&self.vertex_cell, order, |c| {
-            c.map(|c| CellId(new_cell[c.index()]))
+            c.map(|c| CellId::new(new_cell[c.index()]))
         });
     }
 
     /// Moves every cell record to its new id (`order`: old id by new id),
     /// renaming its corners and neighbours.
     fn permute_cells(&mut self, order: &[u32], new_vertex: &[u32], new_cell: &[u32]) {
-        self.cells = gather_mapped(&self.cells, order, |mut cell| {
-            for v in cell.as_mut() {
+        self.slots = gather_mapped(&self.slots, order, |mut slot| {
+            for v in slot.corners.as_mut() {
                 *v = VertexId(new_vertex[v.index()]);
             }
-            cell
-        });
-        self.neighbours = gather_mapped(&self.neighbours, order, |mut nb| {
-            for c in nb.as_mut() {
-                *c = c.map(|c| CellId(new_cell[c.index()]));
+            for c in slot.neighbours.as_mut() {
+                *c = c.map(|c| CellId::new(new_cell[c.index()]));
             }
-            nb
+            slot
         });
         self.labels = gather_from(&self.labels, order);
     }

@@ -37,7 +37,7 @@ impl SeenCells {
         loop {
             match self.slots[slot] {
                 EMPTY => return false,
-                s if s == c.0 => return true,
+                s if s == c.raw() => return true,
                 _ => slot = (slot + 1) % SLOTS,
             }
         }
@@ -58,14 +58,14 @@ impl SeenCells {
         while self.slots[slot] != EMPTY {
             slot = (slot + 1) % SLOTS;
         }
-        self.slots[slot] = c.0;
+        self.slots[slot] = c.raw();
     }
 }
 
 /// The first slot probed for `c` (Fibonacci hashing of the index).
 #[inline]
 fn home(c: CellId) -> usize {
-    (c.0.wrapping_mul(0x9E37_79B9) >> (32 - SLOTS.trailing_zeros())) as usize
+    (c.raw().wrapping_mul(0x9E37_79B9) >> (32 - SLOTS.trailing_zeros())) as usize
 }
 
 #[cfg(test)]
@@ -77,13 +77,13 @@ mod tests {
         let mut seen = SeenCells::new();
         let mut list = Vec::new();
         for i in 0..3 * CAPACITY as u32 {
-            let c = CellId(i * 7919 % 100_003);
+            let c = CellId::new(i * 7919 % 100_003);
             assert!(!seen.contains(c, &list));
             seen.insert(c);
             list.push(c);
             assert!(seen.contains(c, &list));
             assert!(list.iter().all(|&d| seen.contains(d, &list)));
-            assert!(!seen.contains(CellId(200_000 + i), &list));
+            assert!(!seen.contains(CellId::new(200_000 + i), &list));
         }
     }
 }

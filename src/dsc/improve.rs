@@ -403,7 +403,7 @@ impl<K: Connectivity> Complex<K> {
             out.par_extend(
                 (0..self.cell_capacity() as u32)
                     .into_par_iter()
-                    .map(CellId)
+                    .map(CellId::new)
                     .filter(|&c| touches_a_seed(c)),
             );
             return;

@@ -166,7 +166,7 @@ impl<K: Connectivity> Complex<K> {
             failed_splits: Vec::new(),
         };
         for c in 0..end {
-            let c = CellId(c as u32);
+            let c = CellId::new(c as u32);
             if !self.is_alive(c) {
                 continue;
             }
@@ -225,7 +225,7 @@ impl<K: Connectivity> Complex<K> {
         let mut collapses = 0;
         let end = self.cell_capacity();
         for c in 0..end {
-            let c = CellId(c as u32);
+            let c = CellId::new(c as u32);
             if !self.is_alive(c) || self.cell(c).iter().any(|&v| self.class(v).on_interface()) {
                 continue;
             }

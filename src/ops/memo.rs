@@ -230,7 +230,7 @@ pub(crate) fn edge_settled(complex: &Complex<D2>, c: CellId, i: usize, stamp: St
 /// Whether cell `c` existed at the stamp and none of its corners moved since.
 #[inline]
 fn unchanged_since<K: Dim>(complex: &Complex<K>, c: CellId, stamp: Stamp) -> bool {
-    c.0 < stamp.cells_below
+    c.raw() < stamp.cells_below
         && complex
             .cell(c)
             .iter()

@@ -120,7 +120,7 @@ impl ClusterFlipper {
         next: &mut u32,
     ) -> Option<Label> {
         while (*next as usize) < complex.cell_capacity() {
-            let start = CellId(*next);
+            let start = CellId::new(*next);
             *next += 1;
             if self.visited[start.index()] || self.nearer[start.index()].is_none() {
                 continue;

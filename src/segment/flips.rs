@@ -84,7 +84,7 @@ impl Flipper {
         };
         let mut flips = 0;
         for i in 0..complex.cell_capacity() as u32 {
-            let c = CellId(i);
+            let c = CellId::new(i);
             let Some(t) = self.target(complex, &rule, c) else {
                 continue;
             };
@@ -121,7 +121,7 @@ impl Flipper {
             return false;
         };
         (0..complex.cell_capacity() as u32).any(|i| {
-            let c = CellId(i);
+            let c = CellId::new(i);
             self.target(complex, &rule, c).is_some()
                 && (!once || self.first_flip_of_pixels(complex, image, c))
         })
@@ -149,7 +149,7 @@ impl Flipper {
         if rule.phases.mean.len() > 2 {
             let (order, image, cells) = (&self.order, rule.image, rule.cells);
             self.dominant.par_iter_mut().enumerate().for_each(|(i, w)| {
-                let c = CellId(i as u32);
+                let c = CellId::new(i as u32);
                 if !complex.is_alive(c) || cells[i].count == 0 {
                     return;
                 }
@@ -364,7 +364,7 @@ impl Flipper {
         self.comp.resize(cap, u32::MAX);
         let mut ncomp = 0u32;
         for i in 0..cap as u32 {
-            let start = CellId(i);
+            let start = CellId::new(i);
             if !complex.is_alive(start) || self.comp[i as usize] != u32::MAX {
                 continue;
             }

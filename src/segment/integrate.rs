@@ -40,7 +40,7 @@ pub fn integrate_cells<K: Raster>(
     out.clear();
     out.resize(complex.cell_capacity(), CellStats::default());
     let corners = |i: usize| {
-        let c = CellId(i as u32);
+        let c = CellId::new(i as u32);
         complex.is_alive(c).then(|| complex.cell_points(c))
     };
     out.par_chunks_mut(2)
@@ -186,7 +186,7 @@ impl<K: Raster> CellCache<K> {
         let r = &mut self.halves[0];
         r.changed.clear();
         for (i, (k, s)) in self.corners.iter_mut().zip(out.iter_mut()).enumerate() {
-            let c = CellId(i as u32);
+            let c = CellId::new(i as u32);
             if !complex.is_alive(c) {
                 (*k, *s) = (None, CellStats::default());
                 continue;
@@ -325,7 +325,7 @@ impl Refresh {
     ) {
         self.changed.clear();
         for (j, (k, s)) in corners.iter_mut().zip(stats.iter_mut()).enumerate() {
-            let c = CellId((first + j) as u32);
+            let c = CellId::new((first + j) as u32);
             if !complex.is_alive(c) {
                 (*k, *s) = (None, CellStats::default());
                 continue;
@@ -407,7 +407,7 @@ impl RowOrder {
             self.starts[r] += self.starts[r - 1];
         }
         self.sorted.clear();
-        self.sorted.resize(cells.len(), (0, CellId(0)));
+        self.sorted.resize(cells.len(), (0, CellId::new(0)));
         for &(row, c) in cells.iter() {
             let place = &mut self.starts[row as usize];
             self.sorted[*place as usize] = (row, c);
