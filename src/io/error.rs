@@ -32,6 +32,15 @@ pub enum IoError {
         /// The unsupported feature.
         reason: String,
     },
+    /// A multi-page ImageJ TIFF whose pages are not one volume's slices (a
+    /// time series, or a hyperstack of channels, slices and time points).
+    #[error("{path} is {reason}")]
+    NotOneVolume {
+        /// The offending path.
+        path: PathBuf,
+        /// What the pages are and what to do instead.
+        reason: String,
+    },
     /// A channel was asked for that the image does not have.
     #[error("{path} has no channel {channel}: it has {channels} (0 to {last})", last = channels - 1)]
     NoChannel {

@@ -231,7 +231,7 @@ impl Volume {
         let mut dec = Decoder::new(BufReader::new(file)).map_err(bad)?;
         let resolution = tiff_resolution(&mut dec);
         if let Some(stack) = Hyperstack::of_tiff(&mut dec) {
-            return Err(IoError::Unsupported {
+            return Err(IoError::NotOneVolume {
                 path: path.to_path_buf(),
                 reason: stack.refusal(),
             });

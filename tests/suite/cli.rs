@@ -791,7 +791,8 @@ fn an_imagej_time_series_is_refused_by_both_commands() {
     let said = "an ImageJ time series of 5 time points";
     let from_3d = fails(&SEGMENT3D, &input, &out, said);
     let from_2d = fails(&SEGMENT, &input, &out, said);
-    assert!(from_3d.contains("time_lapse.tif") && from_2d.contains("time_lapse.tif"));
+    assert!(from_3d.contains("time_lapse.tif is an ImageJ"), "{from_3d}");
+    assert!(from_2d.contains("time_lapse.tif is an ImageJ"), "{from_2d}");
     assert!(!from_2d.contains("segment3d"), "{from_2d}");
 }
 
