@@ -162,8 +162,8 @@ impl LostPhase {
                 let (lo, hi) = (phase(a).min(phase(b)), phase(a).max(phase(b)));
                 format!(
                     "phases {lo} and {hi} are specks with means closer than the noise and \
-                     no pixel or voxel away from their edges to tell them apart: one region \
-                     divided by noise, not two"
+                     too few pixels or voxels away from their edges to tell them apart: one \
+                     region divided by noise, not two"
                 )
             }
         }
@@ -250,7 +250,7 @@ pub fn plateau_twins(plateaus: &[Option<f64>], tolerance: f64) -> Vec<(usize, us
 /// `plateau_samples`) that nothing shows to be two regions: their means
 /// differ by less than the `noise`, and neither has a plateau measured well
 /// enough to compare within the duplicate `tolerance` ([`plateau_twins`]):
-/// at most `(2·noise/tolerance)²` pixels or voxels beyond the blur of its
+/// fewer than `(2·noise/tolerance)²` pixels or voxels beyond the blur of its
 /// edges, where the plateau's standard error `noise/√n` exceeds half the
 /// tolerance. A region's plateau needs seven pixels or voxels across;
 /// regions that thin with a contrast under the noise are specks of it.

@@ -582,7 +582,8 @@ fn a_flat_noisy_volume_split_in_two_is_said_to_be_one_region() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
-    let said = "phases 0 and 1 are specks with means closer than the noise";
+    let said = "phases 0 and 1 are specks with means closer than the noise and too few \
+                pixels or voxels away from their edges";
     assert!(stderr.contains(&format!("warning: {said}")), "{stderr}");
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
