@@ -418,10 +418,11 @@ impl Segmented {
         Ok(())
     }
 
-    /// `overlay.png` and `overlay.svg`, rendered on two threads: each draws
-    /// the figure at three times the image's size, the most expensive of a
-    /// 2D run's outputs (on a 512² four-phase image more instructions than
-    /// the segmentation).
+    /// `overlay.png` and `overlay.svg`, written on two threads. The PNG,
+    /// drawn at least 768 pixels wide (twice a 512² image's size, three
+    /// times a 256² one's), is the most expensive of a 2D run's outputs (on
+    /// a 512² four-phase image more instructions than the segmentation); the
+    /// SVG embeds the image at its own size and draws the rest as vectors.
     fn write_overlay(
         &self,
         image: &Image2,
