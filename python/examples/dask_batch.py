@@ -61,8 +61,10 @@ def read_input(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
         unit = "mm"
     if spacing is None:
         return array, {}
-    # A size without a unit ("px": ImageJ's "pixel", or none) is no physical size.
-    return array, {"spacing": spacing, **({"unit": unit} if unit != "px" else {})}
+    # "px" too (ImageJ's "pixel", or resolution tags without a unit, as tifffile
+    # writes 1 per unit by default): the command line keeps it, and a size
+    # passed without a unit would be reported in "unit".
+    return array, {"spacing": spacing, "unit": unit}
 
 
 def refuse_time_series(tif) -> None:

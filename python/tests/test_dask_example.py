@@ -90,6 +90,26 @@ def test_a_stacks_voxel_size_is_read_as_the_cli_reads_it(tmp_path, cli):
     )
 
 
+def test_a_plain_tiffs_pixel_units_are_kept_as_the_cli_keeps_them(tmp_path, cli):
+    """tifffile writes a resolution of 1 per unit, no unit, by default: the
+    row's report gives the command line's frame ("px", spacing 1), not a
+    size given in an unnamed "unit"."""
+    example = load_example()
+    volume, _ = dsc_seg.phantom("two_balls", size=20, noise=0.1, seed=1)
+    plain = tmp_path / "plain.tif"
+    tifffile.imwrite(plain, volume)
+    row = example.segment_file(str(plain), str(tmp_path / "out"), 2, "report", {})
+    assert row["status"] == "done", row
+    cli("segment3d", plain, "--phases", 2, "--outputs", "report", "--quiet",
+        "--out", tmp_path / "cli")
+    frames = [
+        json.loads((d / "report.json").read_text())["frame"]
+        for d in (tmp_path / "out" / "plain", tmp_path / "cli")
+    ]
+    assert [f["unit"] for f in frames] == ["px", "px"]
+    assert frames[0]["spacing"] == frames[1]["spacing"] == [1.0, 1.0, 1.0]
+
+
 def test_a_time_series_is_refused_as_the_cli_refuses_it(tmp_path):
     """Time points of one plane (tifffile's ``TYX`` with ``imagej=True``) are
     no volume: its row fails, naming the time series, as ``segment3d`` does."""
