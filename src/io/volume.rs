@@ -1685,7 +1685,7 @@ mod tests {
         }
         drop(enc);
         let e = Volume::load(&p).unwrap_err();
-        assert!(matches!(e, IoError::Unsupported { .. }), "{e}");
+        assert!(matches!(e, IoError::NotOneVolume { .. }), "{e}");
         assert!(
             e.to_string()
                 .contains("2 channels × 2 slices × 2 time points"),
