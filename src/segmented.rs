@@ -271,13 +271,7 @@ impl Segmented {
         let path = |name: &str| stage.path().join(name);
         let frame = &self.frame;
         match &self.render {
-            Render::Image {
-                shown,
-                values,
-                complex,
-                order,
-                nifti_header,
-            } => {
+            Render::Image { shown, .. } => {
                 // The overlay beside the other files: it takes longest.
                 let (overlay, files) = rayon::join(
                     || {
@@ -287,23 +281,7 @@ impl Segmented {
                             Ok(())
                         }
                     },
-                    || -> Result<()> {
-                        self.write_2d_labels(&path, outputs)?;
-                        if let (true, Some(header)) = (outputs.labels, nifti_header) {
-                            let phases = self.measurements.phases.len();
-                            save_labels_nifti(path(NIFTI_LABELS), header, &self.labels, phases)?;
-                        }
-                        if outputs.mesh {
-                            complex.write_mesh_vtu(path("mesh.vtu"), order, frame)?;
-                        }
-                        if outputs.interface {
-                            complex.write_interface_vtp(path("interface.vtp"), order, frame)?;
-                        }
-                        if outputs.image {
-                            write_vti(path("image.vti"), frame, "intensity", values)?;
-                        }
-                        Ok(())
-                    },
+                    || self.write_2d_files(&path, outputs),
                 );
                 overlay?;
                 files?;
@@ -385,6 +363,41 @@ impl Segmented {
             files.insert(1, NIFTI_LABELS);
         }
         stage.publish(dir, &files)
+    }
+
+    /// An image's files but the overlay: its labels (and their NIfTI for a
+    /// NIfTI slice), `mesh.vtu`, `interface.vtp` and `image.vti`, as chosen.
+    fn write_2d_files(
+        &self,
+        path: &(dyn Fn(&str) -> std::path::PathBuf + Sync),
+        outputs: &Outputs,
+    ) -> Result<()> {
+        let Render::Image {
+            values,
+            complex,
+            order,
+            nifti_header,
+            ..
+        } = &self.render
+        else {
+            return Ok(());
+        };
+        let frame = &self.frame;
+        self.write_2d_labels(path, outputs)?;
+        if let (true, Some(header)) = (outputs.labels, nifti_header) {
+            let phases = self.measurements.phases.len();
+            save_labels_nifti(path(NIFTI_LABELS), header, &self.labels, phases)?;
+        }
+        if outputs.mesh {
+            complex.write_mesh_vtu(path("mesh.vtu"), order, frame)?;
+        }
+        if outputs.interface {
+            complex.write_interface_vtp(path("interface.vtp"), order, frame)?;
+        }
+        if outputs.image {
+            write_vti(path("image.vti"), frame, "intensity", values)?;
+        }
+        Ok(())
     }
 
     /// `labels.png` and, for a TIFF input, `labels.tif`.

@@ -24,7 +24,7 @@ use crate::complex::{Complex, Label, VertexKind};
 use crate::dim::{D2, D3};
 use crate::io::intensity::IntensityMap;
 use crate::io::Frame;
-use crate::segment::partial_volume::partial_volume;
+use crate::segment::partial_volume::{estimates_in_parallel, partial_volume};
 use serde::Serialize;
 use std::fmt::Write as _;
 
@@ -131,10 +131,13 @@ impl Measurements {
                 sq[l as usize] += (f64::from(v) - m).powi(2);
             }
         }
-        let (components, pv) = rayon::join(
-            || count_components(labels, frame.dims, phases),
-            || partial_volume(labels, values, frame.dims, phases),
-        );
+        let components = || count_components(labels, frame.dims, phases);
+        let pv = || partial_volume(labels, values, frame.dims, phases);
+        let (components, pv) = if estimates_in_parallel(frame.dims) {
+            rayon::join(components, pv)
+        } else {
+            (components(), pv())
+        };
         let voxel = frame.voxel_measure();
         let rows = (0..phases)
             .map(|p| PhaseRow {
