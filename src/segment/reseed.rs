@@ -227,23 +227,34 @@ pub fn lost_phases(phases: &PhaseStats, tolerance: f64) -> Vec<LostPhase> {
 /// is not, since it also holds the edges' blur and, where noise divides a
 /// region, the side of the noise each phase took.
 pub fn plateau_twins(plateaus: &[Option<f64>], tolerance: f64) -> Vec<(usize, usize)> {
-    let mut sorted: Vec<(f64, usize)> = plateaus
+    adjacent_pairs(plateaus, |(pa, _), (pb, _)| pb - pa < tolerance)
+}
+
+/// The pairs of phases, adjacent in the order of their `values` (`None`:
+/// left out), that `close` accepts (given each side's value and index, the
+/// lower first), taken greedily from the lowest so that each phase is in at
+/// most one pair.
+fn adjacent_pairs(
+    values: &[Option<f64>],
+    close: impl Fn((f64, usize), (f64, usize)) -> bool,
+) -> Vec<(usize, usize)> {
+    let mut sorted: Vec<(f64, usize)> = values
         .iter()
         .enumerate()
-        .filter_map(|(k, p)| p.map(|p| (p, k)))
+        .filter_map(|(k, v)| v.map(|v| (v, k)))
         .collect();
     sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut twins = Vec::new();
+    let mut pairs = Vec::new();
     let mut i = 0;
     while i + 1 < sorted.len() {
-        if sorted[i + 1].0 - sorted[i].0 < tolerance {
-            twins.push((sorted[i].1, sorted[i + 1].1));
+        if close(sorted[i], sorted[i + 1]) {
+            pairs.push((sorted[i].1, sorted[i + 1].1));
             i += 2;
         } else {
             i += 1;
         }
     }
-    twins
+    pairs
 }
 
 /// The pairs of present phases (adjacent by their `means`, indexed as
@@ -265,24 +276,9 @@ pub fn speckled_pairs(
         let n = plateau_samples[k] as f64;
         n > 0.0 && noise / n.sqrt() <= 0.5 * tolerance
     };
-    let mut sorted: Vec<(f64, usize)> = means
-        .iter()
-        .enumerate()
-        .filter_map(|(k, m)| m.map(|m| (m, k)))
-        .collect();
-    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut pairs = Vec::new();
-    let mut i = 0;
-    while i + 1 < sorted.len() {
-        let ((ma, a), (mb, b)) = (sorted[i], sorted[i + 1]);
-        if mb - ma < noise && !measured(a) && !measured(b) {
-            pairs.push((a, b));
-            i += 2;
-        } else {
-            i += 1;
-        }
-    }
-    pairs
+    adjacent_pairs(means, |(ma, a), (mb, b)| {
+        mb - ma < noise && !measured(a) && !measured(b)
+    })
 }
 
 /// The phases present in fewer pixels or voxels than `cell` (one regular

@@ -738,17 +738,12 @@ fn a_nifti_slice_thin_along_x_is_not_sent_to_segment3d() {
     assert!(!message.contains("segment it with"), "{message}");
 }
 
-/// A two-channel, two-slice ImageJ hyperstack is four pages, but not a
-/// volume: both commands refuse it, naming its extents, rather than pointing
-/// `segment`'s user to `segment3d` (which would take the channels for slices).
-#[test]
-fn an_imagej_hyperstack_is_refused_by_both_commands() {
+/// Writes `pages` 16×16 8-bit pages to `path`, the first carrying the
+/// ImageJ description `desc` (as Fiji or tifffile would).
+fn write_imagej_pages(path: &std::path::Path, desc: &str, pages: u8) {
     use tiff::encoder::{colortype, TiffEncoder};
-    let d = tmp();
-    let p = d.path().join("two_channels.tif");
-    let mut enc = TiffEncoder::new(std::fs::File::create(&p).unwrap()).unwrap();
-    let desc = "ImageJ=1.11a\nimages=4\nchannels=2\nslices=2\nhyperstack=true\n";
-    for page in 0..4u8 {
+    let mut enc = TiffEncoder::new(std::fs::File::create(path).unwrap()).unwrap();
+    for page in 0..pages {
         let mut image = enc.new_image::<colortype::Gray8>(16, 16).unwrap();
         if page == 0 {
             let tag = tiff::tags::Tag::ImageDescription;
@@ -757,7 +752,17 @@ fn an_imagej_hyperstack_is_refused_by_both_commands() {
         let data: Vec<u8> = (0..256u32).map(|i| (i % 5 * 40) as u8 + page).collect();
         image.write_data(&data).unwrap();
     }
-    drop(enc);
+}
+
+/// A two-channel, two-slice ImageJ hyperstack is four pages, but not a
+/// volume: both commands refuse it, naming its extents, rather than pointing
+/// `segment`'s user to `segment3d` (which would take the channels for slices).
+#[test]
+fn an_imagej_hyperstack_is_refused_by_both_commands() {
+    let d = tmp();
+    let p = d.path().join("two_channels.tif");
+    let desc = "ImageJ=1.11a\nimages=4\nchannels=2\nslices=2\nhyperstack=true\n";
+    write_imagej_pages(&p, desc, 4);
     let input = [p.to_str().unwrap()];
     let extents = "2 channels × 2 slices × 1 time point";
     let out = empty_out(&d);
@@ -771,21 +776,10 @@ fn an_imagej_hyperstack_is_refused_by_both_commands() {
 /// `segment3d`.
 #[test]
 fn an_imagej_time_series_is_refused_by_both_commands() {
-    use tiff::encoder::{colortype, TiffEncoder};
     let d = tmp();
     let p = d.path().join("time_lapse.tif");
-    let mut enc = TiffEncoder::new(std::fs::File::create(&p).unwrap()).unwrap();
     let desc = "ImageJ=1.11a\nimages=5\nframes=5\nhyperstack=true\nmode=grayscale\nloop=false";
-    for frame in 0..5u8 {
-        let mut image = enc.new_image::<colortype::Gray8>(16, 16).unwrap();
-        if frame == 0 {
-            let tag = tiff::tags::Tag::ImageDescription;
-            image.encoder().write_tag(tag, desc).unwrap();
-        }
-        let data: Vec<u8> = (0..256u32).map(|i| (i % 5 * 40) as u8 + frame).collect();
-        image.write_data(&data).unwrap();
-    }
-    drop(enc);
+    write_imagej_pages(&p, desc, 5);
     let input = [p.to_str().unwrap()];
     let out = empty_out(&d);
     let said = "an ImageJ time series of 5 time points";
