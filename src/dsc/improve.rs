@@ -499,10 +499,19 @@ impl<K: Connectivity> Complex<K> {
         // verdicts recorded in order up to the first degenerate star, as the
         // walk above records them.
         let memo_now = &*memo;
-        walk.degenerate
-            .par_extend(walk.vertices.par_iter().map_init(Vec::new, |star, &v| {
-                !memo_now.still_sound(self, v) && star_degenerate(v, star)
-            }));
+        let unsound = walk
+            .vertices
+            .par_iter()
+            .filter(|&&v| !memo_now.still_sound(self, v))
+            .count();
+        if K::N == 3 && unsound * SEEDS_FOR_A_SCAN >= self.cell_count() {
+            self.mark_degenerate_stars(params, sizing, memo_now, walk);
+        } else {
+            walk.degenerate
+                .par_extend(walk.vertices.par_iter().map_init(Vec::new, |star, &v| {
+                    !memo_now.still_sound(self, v) && star_degenerate(v, star)
+                }));
+        }
         let mut found = false;
         for (&v, &degenerate) in walk.vertices.iter().zip(&walk.degenerate) {
             if memo.still_sound(self, v) {
@@ -516,6 +525,52 @@ impl<K: Connectivity> Complex<K> {
         }
         walk.degenerate.clear();
         found
+    }
+
+    /// Sets `walk.degenerate`, per vertex of `walk.vertices`, to whether it
+    /// is not still sound (`memo`) and its star holds a degenerate cell, by
+    /// one pass over the cells instead of a search of each star: when the
+    /// vertices to judge are many (the interface of a folded volume is most
+    /// of its mesh), their stars cover the cells about four times over (a
+    /// tet lies in the star of each corner), so each cell is judged once
+    /// here where the stars would judge it up to four times.
+    fn mark_degenerate_stars(
+        &self,
+        params: &DscParams,
+        sizing: &SizingField,
+        memo: &ImproveMemo,
+        walk: &mut WalkScratch,
+    ) {
+        let judged = &mut walk.vertex_marks;
+        judged.clear();
+        judged.resize(self.vertex_capacity(), false);
+        for &v in &walk.vertices {
+            judged[v.index()] = !memo.still_sound(self, v);
+        }
+        let judged = &judged[..];
+        let degenerate: Vec<CellId> = (0..self.cell_capacity() as u32)
+            .into_par_iter()
+            .map(CellId::new)
+            .filter(|&c| {
+                self.is_alive(c)
+                    && self.cell(c).iter().any(|w| judged[w.index()])
+                    && self.is_degenerate_sized(c, params, sizing)
+            })
+            .collect();
+        let in_a_degenerate_star = &mut walk.star_marks;
+        in_a_degenerate_star.clear();
+        in_a_degenerate_star.resize(self.vertex_capacity(), false);
+        for &c in &degenerate {
+            for &w in self.cell(c) {
+                in_a_degenerate_star[w.index()] = true;
+            }
+        }
+        walk.degenerate.clear();
+        walk.degenerate.extend(
+            walk.vertices
+                .iter()
+                .map(|&v| judged[v.index()] && in_a_degenerate_star[v.index()]),
+        );
     }
 
     /// The region grown by one ring: every cell sharing a vertex with `cells`.

@@ -1,20 +1,15 @@
 //! Laplacian smoothing of vertices off the interface.
 //!
-//! A pass over many vertices is speculated on rayon's threads: each
-//! vertex's move is computed from the positions at the start of the pass,
-//! then the pass runs in its order, taking the computed move of every vertex
-//! whose star nothing changed since (no vertex of it moved, no cell of it was
-//! replaced) and computing the others again. The moves made are those of the
-//! one-thread pass, whatever the number of threads.
+//! A pass runs on one thread, vertex after vertex, each move seeing the
+//! moves before it. Computing the moves ahead on rayon's threads from the
+//! positions at the start of a pass was tried: most of them were computed
+//! again in order, since a neighbour had moved first, and on the brain
+//! phantom the pass cost more CPU time and memory than it saved wall clock
+//! (benches/RESULTS.md, "Speed, 3D").
 
 use super::ImproveMemo;
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::{Dim, Point};
-use rayon::prelude::*;
-
-/// Passes over fewer vertices run on one thread: the threads' start would
-/// cost more than the pass.
-const SPECULATE_FROM: usize = 4096;
 
 /// A star whose worst cell is at least this good is left alone: smoothing would
 /// barely improve it, and skipping it keeps improvement cheap where the mesh is fine.
@@ -27,8 +22,6 @@ pub struct SmoothScratch<K: Dim> {
     /// Per star cell: its corners and the index of the smoothed vertex
     /// among them (read once, then used by every test of the move).
     corners: Vec<([K::Point; 4], Option<usize>)>,
-    /// Per vertex of a speculated pass, its move computed ahead.
-    speculated: Vec<Speculated<K::Point>>,
 }
 
 impl<K: Dim> Default for SmoothScratch<K> {
@@ -36,20 +29,8 @@ impl<K: Dim> Default for SmoothScratch<K> {
         SmoothScratch {
             star: Vec::new(),
             corners: Vec::new(),
-            speculated: Vec::new(),
         }
     }
-}
-
-/// What smoothing a vertex would do, computed ahead of a pass.
-#[derive(Clone, Copy, Debug)]
-enum Speculated<P> {
-    /// Not computed: the vertex is skipped (dead, on an interface, or known to stay).
-    Skipped,
-    /// Its star is good, or no acceptable move exists.
-    Stays,
-    /// It moves there.
-    MovesTo(P),
 }
 
 /// Layer `ops`: vertex smoothing.
@@ -88,48 +69,17 @@ impl<K: Dim> Complex<K> {
     }
 
     /// One smoothing pass over `vertices`, in their order; returns how many
-    /// moved. Many vertices are speculated in parallel (see the module's
-    /// documentation): the same moves as [`smooth_vertex`](Self::smooth_vertex)
-    /// one after the other.
+    /// moved.
     pub(crate) fn smooth_pass(
         &mut self,
         vertices: &[VertexId],
         scratch: &mut SmoothScratch<K>,
         memo: &mut ImproveMemo,
     ) -> usize {
-        if vertices.len() < SPECULATE_FROM || rayon::current_num_threads() < 2 {
-            return vertices
-                .iter()
-                .filter(|&&v| self.smooth_vertex(v, scratch, memo))
-                .count();
-        }
-        let start = self.move_clock();
-        let mut speculated = std::mem::take(&mut scratch.speculated);
         vertices
-            .par_iter()
-            .map_init(SmoothScratch::default, |scratch, &v| {
-                if self.skips_smoothing(v, memo) {
-                    Speculated::Skipped
-                } else {
-                    self.smoothing_target(v, scratch)
-                        .map_or(Speculated::Stays, Speculated::MovesTo)
-                }
-            })
-            .collect_into_vec(&mut speculated);
-        let mut moved = 0;
-        for (&v, &guess) in vertices.iter().zip(speculated.iter()) {
-            if self.skips_smoothing(v, memo) {
-                continue;
-            }
-            let target = match guess {
-                Speculated::Stays if self.star_changed_at(v) <= start => None,
-                Speculated::MovesTo(p) if self.star_changed_at(v) <= start => Some(p),
-                _ => self.smoothing_target(v, scratch),
-            };
-            moved += usize::from(self.apply_smoothing(v, target, memo));
-        }
-        scratch.speculated = speculated;
-        moved
+            .iter()
+            .filter(|&&v| self.smooth_vertex(v, scratch, memo))
+            .count()
     }
 
     /// Whether smoothing leaves `v` alone without looking at its star.
