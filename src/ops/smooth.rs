@@ -15,6 +15,22 @@ use crate::dim::{Dim, Point};
 /// barely improve it, and skipping it keeps improvement cheap where the mesh is fine.
 const GOOD_ENOUGH: f64 = 0.8;
 
+/// The shortest smoothing move, as a fraction of the mean length of the
+/// vertex's edges: 2 % in 3D (as the forces' smallest move, 0.02·L), none
+/// in 2D. Laplacian smoothing converges slowly: a vertex that moves by a
+/// hair changes the stars of its neighbours, which are then judged again and
+/// move by a hair too, pass after pass. On the brain phantom smoothing was
+/// a third of the run's serial part, and without such moves the run took
+/// 0.89–0.94× the wall clock at the same Dice (benches/RESULTS.md, "Speed,
+/// 3D"); 2D meshes are small and keep every move.
+fn least_move_fraction<K: Dim>() -> f64 {
+    if K::N == 3 {
+        0.02
+    } else {
+        0.0
+    }
+}
+
 /// Scratch space of smoothing, reused from vertex to vertex.
 #[derive(Clone, Debug)]
 pub struct SmoothScratch<K: Dim> {
@@ -127,11 +143,13 @@ impl<K: Dim> Complex<K> {
             })
         };
         let mut sum = K::Point::zero();
+        let mut spoke_sum = 0.0;
         let mut n = 0usize;
         for (pts, i) in star {
             for (j, w) in pts[..K::NV].iter().enumerate() {
                 if Some(j) != *i {
                     sum += *w;
+                    spoke_sum += (*w - p).length();
                     n += 1;
                 }
             }
@@ -140,7 +158,8 @@ impl<K: Dim> Complex<K> {
             return None;
         }
         let target = self.constrain(v, sum * (1.0 / n as f64));
-        if (target - p).length() <= 1e-12 {
+        let least = least_move_fraction::<K>() * spoke_sum / n as f64;
+        if (target - p).length() <= least.max(1e-12) {
             return None;
         }
         if !at(target).all(|pts| K::orient(&pts[..K::NV]) > 0.0) {
