@@ -499,12 +499,13 @@ impl<K: Connectivity> Complex<K> {
         // verdicts recorded in order up to the first degenerate star, as the
         // walk above records them.
         let memo_now = &*memo;
-        let unsound = walk
-            .vertices
-            .par_iter()
-            .filter(|&&v| !memo_now.still_sound(self, v))
-            .count();
-        if K::N == 3 && unsound * SEEDS_FOR_A_SCAN >= self.cell_count() {
+        let unsound = || {
+            walk.vertices
+                .par_iter()
+                .filter(|&&v| !memo_now.still_sound(self, v))
+                .count()
+        };
+        if K::N == 3 && unsound() * SEEDS_FOR_A_SCAN >= self.cell_count() {
             self.mark_degenerate_stars(params, sizing, memo_now, walk);
         } else {
             walk.degenerate

@@ -230,11 +230,11 @@ fn assert_64_levels_agree_on(ph: Phantom3, truth_at_least: f64) {
 }
 
 /// With three and four phases the 64-level re-encoding gives the 8-bit
-/// run's labels too, once the volume has the samples across of the shared
-/// 2D phantoms' scale: the runs part on single voxels along the interfaces,
-/// so their agreement falls with the interfaces' share of the volume. The
-/// three-phase volume at 96³ agrees at 0.994–0.996, the four-phase one at
-/// 128³ at 0.993–0.996 (σ 0.1 and 0.2); at 64³ the four-phase volume agrees
+/// run's labels too, once the volume has enough samples across: the runs
+/// part on single voxels along the interfaces, so their agreement falls
+/// with the interfaces' share of the volume. The three-phase volume at 96³
+/// agrees at 0.994–0.996, the four-phase one at 128³ at 0.992–0.996 (σ 0.1
+/// and 0.2); at 64³ the four-phase volume agrees
 /// at 0.98–0.99, as a 64² four-phase image does at 0.92–0.99
 /// (benches/RESULTS.md, "Encoding stability, 3D"). The default's fine
 /// finish (a last flip round, then the interfaces at `L/2`) brings the runs
