@@ -549,19 +549,22 @@ impl<K: Connectivity> Complex<K> {
             judged[v.index()] = !memo.still_sound(self, v);
         }
         let judged = &judged[..];
-        let degenerate: Vec<CellId> = (0..self.cell_capacity() as u32)
-            .into_par_iter()
-            .map(CellId::new)
-            .filter(|&c| {
-                self.is_alive(c)
-                    && self.cell(c).iter().any(|w| judged[w.index()])
-                    && self.is_degenerate_sized(c, params, sizing)
-            })
-            .collect();
+        let degenerate = &mut walk.degenerate_cells;
+        degenerate.clear();
+        degenerate.par_extend(
+            (0..self.cell_capacity() as u32)
+                .into_par_iter()
+                .map(CellId::new)
+                .filter(|&c| {
+                    self.is_alive(c)
+                        && self.cell(c).iter().any(|w| judged[w.index()])
+                        && self.is_degenerate_sized(c, params, sizing)
+                }),
+        );
         let in_a_degenerate_star = &mut walk.star_marks;
         in_a_degenerate_star.clear();
         in_a_degenerate_star.resize(self.vertex_capacity(), false);
-        for &c in &degenerate {
+        for &c in degenerate.iter() {
             for &w in self.cell(c) {
                 in_a_degenerate_star[w.index()] = true;
             }

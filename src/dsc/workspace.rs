@@ -118,7 +118,9 @@ pub(crate) struct WalkScratch {
     pub(super) ahead: Vec<bool>,
     /// Per vertex of `vertices`: whether its star holds a degenerate cell.
     pub(super) degenerate: Vec<bool>,
-    /// Per vertex id: whether it is a corner of a degenerate cell.
+    /// The degenerate cells found by one pass over the cells, and per
+    /// vertex id whether it is a corner of one.
+    pub(super) degenerate_cells: Vec<CellId>,
     pub(super) star_marks: Vec<bool>,
     /// Cells found not degenerate by the current search for degenerate
     /// cells (see [`CheckedCells`]).

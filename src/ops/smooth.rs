@@ -142,6 +142,7 @@ impl<K: Dim> Complex<K> {
                 pts
             })
         };
+        let fraction = least_move_fraction::<K>();
         let mut sum = K::Point::zero();
         let mut spoke_sum = 0.0;
         let mut n = 0usize;
@@ -149,7 +150,9 @@ impl<K: Dim> Complex<K> {
             for (j, w) in pts[..K::NV].iter().enumerate() {
                 if Some(j) != *i {
                     sum += *w;
-                    spoke_sum += (*w - p).length();
+                    if fraction > 0.0 {
+                        spoke_sum += (*w - p).length();
+                    }
                     n += 1;
                 }
             }
@@ -158,7 +161,7 @@ impl<K: Dim> Complex<K> {
             return None;
         }
         let target = self.constrain(v, sum * (1.0 / n as f64));
-        let least = least_move_fraction::<K>() * spoke_sum / n as f64;
+        let least = fraction * spoke_sum / n as f64;
         if (target - p).length() <= least.max(1e-12) {
             return None;
         }
