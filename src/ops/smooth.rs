@@ -165,14 +165,17 @@ impl<K: Dim> Complex<K> {
         if (target - p).length() <= least.max(1e-12) {
             return None;
         }
-        if !at(target).all(|pts| K::orient(&pts[..K::NV]) > 0.0) {
-            return None;
-        }
         // (the star's quality now, measured only for a move worth testing)
         let before = at(p)
             .map(|pts| K::quality_oriented(&pts[..K::NV]))
             .fold(1.0, f64::min);
         if !at(target).all(|pts| K::quality_oriented_at_least(&pts[..K::NV], before)) {
+            return None;
+        }
+        // The exact orientation test last: most moves fail the quality test,
+        // and the formula's clamp to 0 already fails most inversions; the
+        // test decides those the formula's rounding cannot.
+        if !at(target).all(|pts| K::orient(&pts[..K::NV]) > 0.0) {
             return None;
         }
         Some(target)
