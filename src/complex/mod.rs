@@ -347,8 +347,17 @@ impl<K: Dim> Complex<K> {
 
     /// The cells around the edge `uv` from `first` (which holds it), in
     /// turning order: one way round until the ring closes, or, where it
-    /// meets the domain boundary, both ways from `first`.
-    fn turn_around_edge(&self, u: VertexId, v: VertexId, first: CellId, out: &mut Vec<CellId>) {
+    /// meets the domain boundary, both ways from `first`. A caller that
+    /// knows a cell of the edge turns from it rather than searching the
+    /// star of `u` for one (3D only: in 2D an edge's cells are its fan's).
+    pub(crate) fn turn_around_edge(
+        &self,
+        u: VertexId,
+        v: VertexId,
+        first: CellId,
+        out: &mut Vec<CellId>,
+    ) {
+        out.clear();
         out.push(first);
         // The facets of a cell that hold the edge are those opposite its
         // two other corners.

@@ -41,6 +41,109 @@ fn tet_quality(p: [Vector3<f64>; 4]) -> f64 {
     D3::quality(&p)
 }
 
+/// The apexes of a ring's best triangulation: `apex(a, c)` is the apex of
+/// the triangle on the side `a..c` of the sub-polygon `a..=c`.
+struct Splits([[usize; MAX_RING]; MAX_RING]);
+
+impl Splits {
+    fn apex(&self, a: usize, c: usize) -> usize {
+        self.0[a][c]
+    }
+
+    /// The triangles `(a, b, c)` of the triangulation of a ring of `k`
+    /// vertices, from the whole polygon's down.
+    fn triangles(&self, k: usize) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
+        let mut stack: SmallVec<[(usize, usize); MAX_RING]> = SmallVec::new();
+        stack.push((0, k - 1));
+        std::iter::from_fn(move || loop {
+            let (a, c) = stack.pop()?;
+            if c >= a + 2 {
+                let b = self.apex(a, c);
+                stack.push((a, b));
+                stack.push((b, c));
+                return Some((a, b, c));
+            }
+        })
+    }
+}
+
+/// The two tets a triangle `(a, b, c)` of the ring forms with `v` and `u`
+/// (`t` maps a ring index to its vertex or point).
+fn ring_tets<T: Copy>(
+    t: impl Fn(usize) -> T,
+    (a, b, c): (usize, usize, usize),
+    u: T,
+    v: T,
+) -> [[T; 4]; 2] {
+    [[t(a), t(b), t(c), v], [t(b), t(a), t(c), u]]
+}
+
+/// The retriangulation of the ring `w` around the edge `uv` whose smallest
+/// tet quality is largest (Klincsek's dynamic programme), if that quality
+/// exceeds `floor`. The programme runs on the quality formula alone,
+/// without the exact orientation test of each of its up to 70 tets; the
+/// tets of a choice above `floor` then take the test, and only if one
+/// fails does the programme run again with exact qualities. The formula
+/// differs from the exact quality only on a tet the test finds inverted or
+/// flat, where it may round to a hair above 0 (it is never below): a
+/// choice at or under `floor` is under it exactly too, and a choice free
+/// of such tets is the exact programme's choice.
+fn best_retriangulation(
+    w: &[Vector3<f64>],
+    pu: Vector3<f64>,
+    pv: Vector3<f64>,
+    floor: f64,
+) -> Option<Splits> {
+    let (best, split) = klincsek(w, pu, pv, |p| D3::quality_oriented(&p));
+    if best <= floor {
+        return None;
+    }
+    let oriented = split
+        .triangles(w.len())
+        .flat_map(|t| ring_tets(|i| w[i], t, pu, pv))
+        .all(|p| D3::orient(&p) > 0.0);
+    if oriented {
+        return Some(split);
+    }
+    let (best, split) = klincsek(w, pu, pv, tet_quality);
+    (best > floor).then_some(split)
+}
+
+/// Klincsek's programme over the ring `w` with the tet quality `quality`.
+fn klincsek(
+    w: &[Vector3<f64>],
+    pu: Vector3<f64>,
+    pv: Vector3<f64>,
+    quality: impl Fn([Vector3<f64>; 4]) -> f64,
+) -> (f64, Splits) {
+    let k = w.len();
+    // The smaller quality of the two tets of a triangle of the ring.
+    let tri_q = |a: usize, b: usize, c: usize| {
+        let [with_v, with_u] = ring_tets(|i| w[i], (a, b, c), pu, pv);
+        quality(with_v).min(quality(with_u))
+    };
+    // best[a][c]: best smallest quality triangulating the sub-polygon a..=c; split[a][c]: its apex.
+    let mut best = [[f64::INFINITY; MAX_RING]; MAX_RING];
+    let mut split = [[0usize; MAX_RING]; MAX_RING];
+    // Index arithmetic over the interval table reads more plainly than iterators.
+    #[allow(clippy::needless_range_loop)]
+    for len in 2..k {
+        for a in 0..k - len {
+            let c = a + len;
+            let mut top = -1.0;
+            for b in a + 1..c {
+                let q = best[a][b].min(best[b][c]).min(tri_q(a, b, c));
+                if q > top {
+                    top = q;
+                    split[a][c] = b;
+                }
+            }
+            best[a][c] = top;
+        }
+    }
+    (best[0][k - 1], Splits(split))
+}
+
 /// Layer `ops`: 3D flips (2-3, 3-2, edge removal).
 impl Complex<D3> {
     /// The 2-3 flip of the facet opposite local vertex `i` of `c`: replaces `c`
@@ -95,20 +198,14 @@ impl Complex<D3> {
     /// the ring is open (the edge lies on the domain boundary) or not a simple cycle.
     pub fn edge_ring(&self, u: VertexId, v: VertexId) -> Option<(Vec<VertexId>, Vec<CellId>)> {
         let mut tets = Vec::new();
-        let ring = self.ring_of_edge(u, v, &mut Vec::new(), &mut tets)?;
+        self.cells_of_edge(u, v, &mut Vec::new(), &mut tets);
+        let ring = self.ring_of_edge(u, v, &tets)?;
         Some((ring.to_vec(), tets))
     }
 
-    /// [`edge_ring`](Self::edge_ring) into scratch lists: `tets` receives the
-    /// tets of the ring (`star` is scratch); the ring is returned.
-    fn ring_of_edge(
-        &self,
-        u: VertexId,
-        v: VertexId,
-        star: &mut Vec<CellId>,
-        tets: &mut Vec<CellId>,
-    ) -> Option<Ring> {
-        self.cells_of_edge(u, v, star, tets);
+    /// The ring of the edge `uv` whose tets are `tets` (in turning order):
+    /// see [`edge_ring`](Self::edge_ring).
+    fn ring_of_edge(&self, u: VertexId, v: VertexId, tets: &[CellId]) -> Option<Ring> {
         if tets.len() < 3 {
             return None;
         }
@@ -171,75 +268,61 @@ impl Complex<D3> {
             return Err(Rejection::Stale);
         }
         let (mut star, mut tets) = (self.take_list(), self.take_list());
-        let result = self.remove_edge_with(u, v, margin, &mut star, &mut tets);
+        self.cells_of_edge(u, v, &mut star, &mut tets);
+        let result = self.remove_ring_edge(u, v, margin, &tets);
         self.give_back(star);
         self.give_back(tets);
         result
     }
 
-    /// [`remove_edge`](Self::remove_edge) with two empty lists.
-    fn remove_edge_with(
+    /// [`remove_edge`](Self::remove_edge) of the edge `uv` of the tet `c`:
+    /// its ring is found by turning around the edge from `c`, with no search
+    /// of the star of `u`.
+    fn remove_edge_of(
+        &mut self,
+        c: CellId,
+        u: VertexId,
+        v: VertexId,
+        margin: f64,
+    ) -> Result<Flip3, Rejection> {
+        let mut tets = self.take_list();
+        self.turn_around_edge(u, v, c, &mut tets);
+        let result = self.remove_ring_edge(u, v, margin, &tets);
+        self.give_back(tets);
+        result
+    }
+
+    /// [`remove_edge`](Self::remove_edge) with the tets around the edge.
+    fn remove_ring_edge(
         &mut self,
         u: VertexId,
         v: VertexId,
         margin: f64,
-        star: &mut Vec<CellId>,
-        tets: &mut Vec<CellId>,
+        tets: &[CellId],
     ) -> Result<Flip3, Rejection> {
+        // (labels first: the ring of an edge on the interface is not needed)
+        let label = self.label(*tets.first().ok_or(Rejection::Constrained)?);
+        if tets.iter().any(|&t| self.label(t) != label) {
+            return Err(Rejection::Constrained);
+        }
         let ring = self
-            .ring_of_edge(u, v, star, tets)
+            .ring_of_edge(u, v, tets)
             .ok_or(Rejection::Constrained)?;
         let k = ring.len();
         if k > MAX_RING {
-            return Err(Rejection::Constrained);
-        }
-        let label = self.label(tets[0]);
-        if tets.iter().any(|&t| self.label(t) != label) {
             return Err(Rejection::Constrained);
         }
         let old_q = tets.iter().map(|&t| self.quality(t)).fold(1.0, f64::min);
         let (pu, pv) = (self.position(u), self.position(v));
         let w: SmallVec<[Vector3<f64>; MAX_RING]> =
             ring.iter().map(|&x| self.position(x)).collect();
-        // Quality of the two tets a triangle (a, b, c) of the ring forms with u and v.
-        let tri_q = |a: usize, b: usize, c: usize| {
-            tet_quality([w[a], w[b], w[c], pv]).min(tet_quality([w[b], w[a], w[c], pu]))
-        };
-        // best[a][c]: best smallest quality triangulating the sub-polygon a..=c; split[a][c]: its apex.
-        let mut best = [[f64::INFINITY; MAX_RING]; MAX_RING];
-        let mut split = [[0usize; MAX_RING]; MAX_RING];
-        // Index arithmetic over the interval table reads more plainly than iterators.
-        #[allow(clippy::needless_range_loop)]
-        for len in 2..k {
-            for a in 0..k - len {
-                let c = a + len;
-                let mut top = -1.0;
-                for b in a + 1..c {
-                    let q = best[a][b].min(best[b][c]).min(tri_q(a, b, c));
-                    if q > top {
-                        top = q;
-                        split[a][c] = b;
-                    }
-                }
-                best[a][c] = top;
-            }
-        }
-        if best[0][k - 1] <= old_q + margin {
-            return Err(Rejection::LowQuality);
-        }
-        let mut new: SmallVec<[([VertexId; 4], Label); 2 * MAX_RING]> = SmallVec::new();
-        let mut stack: SmallVec<[(usize, usize); MAX_RING]> = SmallVec::new();
-        stack.push((0, k - 1));
-        while let Some((a, c)) = stack.pop() {
-            if c < a + 2 {
-                continue;
-            }
-            let b = split[a][c];
-            new.push(([ring[a], ring[b], ring[c], v], label));
-            new.push(([ring[b], ring[a], ring[c], u], label));
-            stack.push((a, b));
-            stack.push((b, c));
-        }
+        let split =
+            best_retriangulation(&w, pu, pv, old_q + margin).ok_or(Rejection::LowQuality)?;
+        let new: SmallVec<[([VertexId; 4], Label); 2 * MAX_RING]> = split
+            .triangles(k)
+            .flat_map(|t| ring_tets(|i| ring[i], t, u, v))
+            .map(|tet| (tet, label))
+            .collect();
         self.replace_cells(tets, &new)?;
         Ok(Flip3::EdgeRemoval(k))
     }
@@ -253,7 +336,7 @@ impl Complex<D3> {
         let cell: [VertexId; 4] = D3::cell(self.cell(c));
         for a in 0..4 {
             for b in a + 1..4 {
-                if let Ok(f) = self.remove_edge(cell[a], cell[b], margin) {
+                if let Ok(f) = self.remove_edge_of(c, cell[a], cell[b], margin) {
                     return Some(f);
                 }
             }
