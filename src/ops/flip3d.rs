@@ -402,6 +402,51 @@ mod tests {
         assert_eq!(c.cell_count(), 2);
     }
 
+    /// The formula-first programme decides as the exact one: the same
+    /// verdict against the floor and the same triangles, on random rings
+    /// (convex and not, some with corners pushed onto the edge's line).
+    #[test]
+    fn best_retriangulation_chooses_as_the_exact_programme() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (pu, pv) = (Vector3::new(0.0, 0.0, 1.0), Vector3::new(0.0, 0.0, -1.0));
+        for _ in 0..5000 {
+            let k = rng.random_range(3..=MAX_RING);
+            let mut w: Vec<Vector3<f64>> = (0..k)
+                .map(|i| {
+                    let angle =
+                        std::f64::consts::TAU * (i as f64 + rng.random::<f64>() * 0.8) / k as f64;
+                    let r = if rng.random::<f64>() < 0.1 {
+                        1e-9
+                    } else {
+                        0.3 + rng.random::<f64>()
+                    };
+                    Vector3::new(r * angle.cos(), r * angle.sin(), rng.random::<f64>() - 0.5)
+                })
+                .collect();
+            // A corner on the segment of its neighbours, up to rounding:
+            // tets whose sign only the exact test knows.
+            if rng.random::<f64>() < 0.5 {
+                let i = rng.random_range(1..k - 1);
+                let t = rng.random::<f64>();
+                w[i] = w[i - 1] * t + w[i + 1] * (1.0 - t);
+            }
+            // (0 as in the flips, against a ring whose worst tet is flat)
+            let floor = if rng.random::<f64>() < 0.3 {
+                0.0
+            } else {
+                rng.random::<f64>() * 0.5 - 0.1
+            };
+            let (best, exact) = klincsek(&w, pu, pv, tet_quality);
+            let fast = best_retriangulation(&w, pu, pv, floor);
+            assert_eq!(fast.is_some(), best > floor, "ring {w:?}, floor {floor}");
+            if let Some(fast) = fast {
+                let triangles: Vec<_> = fast.triangles(k).collect();
+                assert_eq!(triangles, exact.triangles(k).collect::<Vec<_>>());
+            }
+        }
+    }
+
     #[test]
     fn non_convex_pair_is_not_flipped() {
         // Apexes far to the side: the segment 3-4 misses the shared facet.
