@@ -182,7 +182,6 @@ impl<K: Dim> Complex<K> {
         if edge_cells.is_empty() {
             return Err(Rejection::Stale);
         }
-        self.check_link(u, v, star_u, star_v, edge_cells)?;
         let (pu, pv) = (self.position(u), self.position(v));
         let (free_u, free_v) = match ends_free {
             Some(free) => free,
@@ -228,6 +227,12 @@ impl<K: Dim> Complex<K> {
                 }
             }
         }
+        if candidates.is_empty() {
+            return Err(Rejection::NoCandidate);
+        }
+        // (the link condition, a sort of the stars' corners, only for a
+        // collapse with a candidate: most have none)
+        self.check_link(u, v, star_u, star_v, edge_cells)?;
         // Best quality first; a candidate the cavity primitive rejects (e.g. a
         // domain-boundary facet that cannot be kept) falls through to the next.
         candidates.sort_by(|a, b| b.0.total_cmp(&a.0));
@@ -387,11 +392,18 @@ impl<K: Dim> Complex<K> {
             // Every label around is one phase's: only the kept vertex's
             // boundary mask (its position) may have changed.
             self.reclassify_vertices(&mut [cand.keep]);
-        } else {
-            // The kept vertex moved: its whole star may change class (boundary mask).
+        } else if removed.on_boundary() {
+            // Domain-boundary facets were renamed and may have been glued:
+            // the whole star of the kept vertex is classified again.
             self.star_into(cand.keep, star);
             self.reclassify_cells(star);
         }
+        // (otherwise the cavity classified every corner of the new cells,
+        // the kept vertex in its new place among them: a vertex whose star
+        // lost a cell of the removed vertex's star is a corner of a new cell:
+        // off the domain boundary, an edge from the removed vertex has more
+        // cells around it than hold the kept vertex (two tets of three or
+        // more, one triangle of two), and the others become new cells)
         result
     }
 
