@@ -57,7 +57,10 @@ impl Dim for D3 {
     }
     /// The quality formula alone: the exact orientation test of
     /// [`quality`](Dim::quality) costs about as much as the formula, and
-    /// most qualities asked for are of the complex's own tets.
+    /// most qualities asked for are of the complex's own tets. On any tet it
+    /// is at least [`quality`](Dim::quality) (equal where the exact test
+    /// finds the tet positive; in `[0, 1]`, and 0 rather than NaN for four
+    /// coincident corners): edge removal's programme relies on it.
     #[inline]
     fn quality_oriented(p: &[Self::Point]) -> f64 {
         let mut sum_sq = 0.0;
@@ -67,7 +70,9 @@ impl Dim for D3 {
             }
         }
         let l_rms = (sum_sq / 6.0).sqrt();
-        (6.0 * 2f64.sqrt() * Self::signed_measure(p) / (l_rms * l_rms * l_rms)).clamp(0.0, 1.0)
+        let q = 6.0 * 2f64.sqrt() * Self::signed_measure(p) / (l_rms * l_rms * l_rms);
+        // (`max` and `min` take the number over NaN, so 0/0 gives 0)
+        q.max(0.0).min(1.0)
     }
     #[inline]
     fn quality_oriented_at_least(p: &[Self::Point], q_min: f64) -> bool {

@@ -150,7 +150,10 @@ impl<K: Dim> Complex<K> {
 
     /// [`collapse_edge`](Self::collapse_edge) with four empty lists for the
     /// stars of `u` and `v`, the cells of the edge, and other stars. The
-    /// cheap refusals come first; any refusal leaves the complex unchanged.
+    /// refusals come cheapest first (the link condition, a sort of the
+    /// stars' corners, after the candidates' qualities: most collapses have
+    /// no candidate, and then report `NoCandidate` even where the link
+    /// fails too); any refusal leaves the complex unchanged.
     fn collapse_edge_with(
         &mut self,
         u: VertexId,
@@ -400,7 +403,7 @@ impl<K: Dim> Complex<K> {
         }
         // (otherwise the cavity classified every corner of the new cells,
         // the kept vertex in its new place among them: a vertex whose star
-        // lost a cell of the removed vertex's star is a corner of a new cell:
+        // lost or gained a cell is a corner of a new cell:
         // off the domain boundary, an edge from the removed vertex has more
         // cells around it than hold the kept vertex (two tets of three or
         // more, one triangle of two), and the others become new cells)

@@ -85,9 +85,10 @@ fn ring_tets<T: Copy>(
 /// tets of a choice above `floor` then take the test, and only if one
 /// fails does the programme run again with exact qualities. The formula
 /// differs from the exact quality only on a tet the test finds inverted or
-/// flat, where it may round to a hair above 0 (it is never below): a
-/// choice at or under `floor` is under it exactly too, and a choice free
-/// of such tets is the exact programme's choice.
+/// flat, where it may round to a hair above 0 (it is never below, see
+/// [`D3::quality_oriented`](crate::dim::Dim::quality_oriented)): a choice
+/// at or under `floor` is under it exactly too, and a choice free of such
+/// tets is the exact programme's choice.
 fn best_retriangulation(
     w: &[Vector3<f64>],
     pu: Vector3<f64>,
@@ -203,7 +204,7 @@ impl Complex<D3> {
         Some((ring.to_vec(), tets))
     }
 
-    /// The ring of the edge `uv` whose tets are `tets` (in turning order):
+    /// The ring of the edge `uv` whose tets are `tets` (in any order):
     /// see [`edge_ring`](Self::edge_ring).
     fn ring_of_edge(&self, u: VertexId, v: VertexId, tets: &[CellId]) -> Option<Ring> {
         if tets.len() < 3 {

@@ -124,9 +124,10 @@ impl<K: Dim> Complex<K> {
         star: &[([K::Point; 4], Option<usize>)],
     ) -> Option<K::Point> {
         // Most stars are good: decide that without computing the qualities.
-        // (The star's cells are the complex's, positively oriented, and so
-        // are the moved ones that pass the orientation test below: their
-        // qualities need no second orientation test.)
+        // (The star's cells are the complex's, positively oriented. The
+        // moved ones are judged by the formula before the orientation test
+        // below; a move must pass both, so an inverted cell's formula value
+        // decides nothing.)
         if star
             .iter()
             .all(|(pts, _)| K::quality_oriented_at_least(&pts[..K::NV], GOOD_ENOUGH))
