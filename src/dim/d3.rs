@@ -71,8 +71,12 @@ impl Dim for D3 {
         }
         let l_rms = (sum_sq / 6.0).sqrt();
         let q = 6.0 * 2f64.sqrt() * Self::signed_measure(p) / (l_rms * l_rms * l_rms);
-        // (`max` and `min` take the number over NaN, so 0/0 gives 0)
-        q.max(0.0).min(1.0)
+        // (0/0, four coincident corners, gives 0: `clamp` would keep NaN)
+        if q.is_nan() {
+            0.0
+        } else {
+            q.clamp(0.0, 1.0)
+        }
     }
     #[inline]
     fn quality_oriented_at_least(p: &[Self::Point], q_min: f64) -> bool {
