@@ -118,9 +118,9 @@ pub(crate) struct WalkScratch {
     pub(super) ahead: Vec<bool>,
     /// Per vertex of `vertices`: whether its star holds a degenerate cell.
     pub(super) degenerate: Vec<bool>,
-    /// The degenerate cells found by one pass over the cells, and per
-    /// vertex id whether it is a corner of one.
+    /// The degenerate cells found by one pass over the cells.
     pub(super) degenerate_cells: Vec<CellId>,
+    /// Per vertex id: whether it is a corner of one of `degenerate_cells`.
     pub(super) star_marks: Vec<bool>,
     /// Cells found not degenerate by the current search for degenerate
     /// cells (see [`CheckedCells`]).

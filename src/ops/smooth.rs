@@ -123,11 +123,13 @@ impl<K: Dim> Complex<K> {
         v: VertexId,
         star: &[([K::Point; 4], Option<usize>)],
     ) -> Option<K::Point> {
-        // Most stars are good: decide that without computing the qualities.
-        // (The star's cells are the complex's, positively oriented. The
-        // moved ones are judged by the formula before the orientation test
-        // below; a move must pass both, so an inverted cell's formula value
-        // decides nothing.)
+        // A good star is left without computing the qualities. (In 3D
+        // hardly any is: on the brain phantom at `--size 120` none of the
+        // 2.25 million stars judged had all its tets at 0.8, and the test
+        // cost a quality or two each. The star's cells are the complex's,
+        // positively oriented. The moved ones are judged by the formula
+        // before the orientation test below; a move must pass both, so an
+        // inverted cell's formula value decides nothing.)
         if star
             .iter()
             .all(|(pts, _)| K::quality_oriented_at_least(&pts[..K::NV], GOOD_ENOUGH))
