@@ -60,6 +60,13 @@ pub struct EvolutionArgs {
     /// round counts) [default: 0 in 2D, 0.01 in 3D].
     #[arg(long, value_name = "F")]
     pub quiet_round_fraction: Option<f64>,
+    /// Runs with flip rounds: the interfaces count as settled once the
+    /// energy has fallen over the last 3 iterations by less than this
+    /// fraction of its fastest fall in one iteration; the settle round
+    /// follows, and a quiet round ends the run (0: only the energy plateau)
+    /// [default: 0 in 2D, 0.05 in 3D].
+    #[arg(long, value_name = "F")]
+    pub settle_rate: Option<f64>,
     /// Triple-junction force of eq. (7): `edge-local` (the default: each
     /// sample bracketed by its own edge's phases) or `paper` (literal: the
     /// junction's phases bracket every sample; grows wedges on blurred edges).
@@ -112,6 +119,7 @@ impl EvolutionArgs {
         set(&mut p.step_fraction, self.step_fraction);
         set(&mut p.step_gain, self.step_gain);
         set(&mut p.quiet_round_fraction, self.quiet_round_fraction);
+        set(&mut p.settle_rate, self.settle_rate);
         set(&mut p.length_weight, self.length_weight);
         p.flip_interval = self.flip_interval.unwrap_or(p.flip_interval);
         if self.adaptive || self.min_edge_length.is_some() || self.max_edge_length.is_some() {

@@ -142,6 +142,7 @@ pub fn coarse_mesh<K: Raster>(
     coarse.edge_length = Some(2.0 * l);
     coarse.sizing.finish = None;
     coarse.quiet_round_plateau = Some(0);
+    coarse.settle_rate = 0.0;
     let mut seg = Segmentation::<K>::new(view, coarse)?;
     let report = seg.run(|_| {});
     let mut complex = seg.complex().clone();

@@ -35,6 +35,10 @@ use std::time::Instant;
 /// Iterations without a new lowest energy after which the step is halved.
 pub const STALL_ITERATIONS: usize = 10;
 
+/// Iterations over which [`energy_fall_slowed`] measures the energy's
+/// recent fall ([`SegmentParams::settle_rate`]).
+const SETTLE_SPAN: usize = 3;
+
 /// The start's refinement ends after a pass that grows the mesh by less
 /// than 1/`START_GROWTH` of its cells.
 const START_GROWTH: usize = 10;
@@ -897,10 +901,10 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.params.label_flips
             && self.params.flip_interval > 1
             && self.last_flip_round == 1
-            && self
-                .params
-                .converge_plateau
-                .is_some_and(|n| self.since_new_low >= n)
+            && self.params.converge_plateau.is_some_and(|n| {
+                self.since_new_low >= n
+                    || energy_fall_slowed(&self.history, self.params.settle_rate)
+            })
     }
 
     /// Whether a flip round (`round`: one after the first iteration that
@@ -930,8 +934,9 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             .params
             .quiet_round_plateau
             .or_else(|| self.params.converge_plateau.map(|n| n.div_ceil(2)));
-        if self.params.converge_plateau.is_some() && needed.is_some_and(|n| self.since_new_low >= n)
-        {
+        let on_plateau = needed.is_some_and(|n| self.since_new_low >= n)
+            || energy_fall_slowed(&self.history, self.params.settle_rate);
+        if self.params.converge_plateau.is_some() && on_plateau {
             self.quiet_round_on_plateau = true;
         }
         self.best_energy = self.best_energy.min(energy);
@@ -1715,6 +1720,22 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     }
 }
 
+/// Whether the energy of `history` has fallen over its last
+/// [`SETTLE_SPAN`] iterations by less than `rate` times its fastest fall
+/// in one iteration: the interfaces have reached the data's edges, and
+/// what is left is the slow relaxation of noise-sized bumps
+/// ([`SegmentParams::settle_rate`]). Never with a `rate` of 0.
+fn energy_fall_slowed(history: &[IterationRecord], rate: f64) -> bool {
+    if rate <= 0.0 || history.len() <= SETTLE_SPAN {
+        return false;
+    }
+    let energy: Vec<f64> = history.iter().map(|r| r.energy).collect();
+    let fastest = energy.windows(2).map(|w| w[0] - w[1]).fold(0.0, f64::max);
+    let last = energy.len() - 1;
+    let recent = (energy[last - SETTLE_SPAN] - energy[last]) / SETTLE_SPAN as f64;
+    fastest > 0.0 && recent < rate * fastest
+}
+
 /// Whether one of `rules` would change a label
 /// ([`LabelRule::would_relabel`]),
 /// asking them in order until one says yes; `None` if a rule asked cannot
@@ -1730,4 +1751,46 @@ fn would_relabel<K: Raster>(
         }
     }
     Some(false)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn history(energies: &[f64]) -> Vec<IterationRecord> {
+        energies
+            .iter()
+            .enumerate()
+            .map(|(i, &energy)| IterationRecord {
+                iteration: i + 1,
+                energy,
+                data_energy: energy,
+                length: 0.0,
+                flips: 0,
+                max_displacement: 0.0,
+                max_displacement_across: 0.0,
+                means: Vec::new(),
+                junctions: (0, 0),
+                cells: 0,
+                edge_lengths: None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_energy_fall_slows_against_its_fastest_step() {
+        // A fall of 100, then 2 per iteration: 2 < 0.05 · 100.
+        let slowed = history(&[1000.0, 900.0, 898.0, 896.0, 894.0]);
+        assert!(energy_fall_slowed(&slowed, 0.05));
+        assert!(!energy_fall_slowed(&slowed, 0.0), "0 turns the rule off");
+        assert!(!energy_fall_slowed(&slowed, 0.01));
+        // Too short to measure a fall over 3 iterations.
+        assert!(!energy_fall_slowed(&slowed[..3], 0.05));
+        // Still falling by 10 per iteration.
+        let falling = history(&[1000.0, 900.0, 890.0, 880.0, 870.0]);
+        assert!(!energy_fall_slowed(&falling, 0.05));
+        // An energy that never fell has no rate to slow from.
+        let flat = history(&[1000.0, 1000.0, 1001.0, 1001.0, 1001.0]);
+        assert!(!energy_fall_slowed(&flat, 0.05));
+    }
 }
