@@ -60,11 +60,12 @@ pub struct EvolutionArgs {
     /// round counts) [default: 0 in 2D, 0.01 in 3D].
     #[arg(long, value_name = "F")]
     pub quiet_round_fraction: Option<f64>,
-    /// Runs with flip rounds: the interfaces count as settled once the
-    /// energy has fallen over the last 3 iterations by less than this
-    /// fraction of its fastest fall in one iteration; the settle round
-    /// follows, and a quiet round ends the run (0: only the energy plateau)
-    /// [default: 0 in 2D, 0.05 in 3D].
+    /// Runs with flip rounds (3D; in 2D only with --flip-interval above 1):
+    /// the interfaces count as settled once the energy's mean fall per
+    /// iteration over the last 3 is less than this fraction of its fastest
+    /// fall in one iteration; the settle round follows, and a quiet round
+    /// ends the run (0: only the energy plateau) [default: 0 in 2D, 0.05 in
+    /// 3D].
     #[arg(long, value_name = "F")]
     pub settle_rate: Option<f64>,
     /// Triple-junction force of eq. (7): `edge-local` (the default: each

@@ -303,6 +303,11 @@ pub struct Segmentation<'a, K: Raster> {
     /// Iterations since the energy last reached a new low (not reset when
     /// the step is halved): the plateau of [`SegmentParams::converge_plateau`].
     since_new_low: usize,
+    /// The first record of `history` from which [`energy_fall_slowed`]
+    /// measures the energy's fall: the energy of a re-seeded or relabelled
+    /// state starts a fall of its own (a re-seed weighs the length term
+    /// anew, and the rise across it is no fall).
+    fall_origin: usize,
     /// Whether a quiet flip round came on an energy plateau
     /// ([`SegmentParams::quiet_round_fraction`]): the run has converged.
     quiet_round_on_plateau: bool,
@@ -544,6 +549,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             best_energy: f64::INFINITY,
             stalled: 0,
             since_new_low: 0,
+            fall_origin: 0,
             quiet_round_on_plateau: false,
             last_flip_round: 0,
             finish_left: None,
@@ -868,6 +874,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         if self.relabelling_round(flips_due && iteration > 1 && !reseeded, flips, quiet_round) {
             // The relabelled state gets a whole plateau to relax.
             self.since_new_low = 0;
+            self.fall_origin = self.history.len();
         }
         if flips == 0 && self.settled(rec.max_displacement_across) {
             self.quiet_iterations += 1;
@@ -888,7 +895,8 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             || self.settle_round_due()
     }
 
-    /// Whether the energy plateau is reached in a run with flip rounds
+    /// Whether the energy plateau is reached, or the energy's fall has
+    /// slowed ([`SegmentParams::settle_rate`]), in a run with flip rounds
     /// ([`flip_interval`](SegmentParams::flip_interval) > 1) whose only round
     /// so far was the first iteration's: the labels have not been judged
     /// since the interfaces settled, so the next iteration is a flip round
@@ -901,10 +909,17 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.params.label_flips
             && self.params.flip_interval > 1
             && self.last_flip_round == 1
-            && self.params.converge_plateau.is_some_and(|n| {
-                self.since_new_low >= n
-                    || energy_fall_slowed(&self.history, self.params.settle_rate)
-            })
+            && self
+                .params
+                .converge_plateau
+                .is_some_and(|n| self.since_new_low >= n || self.energy_fall_slowed())
+    }
+
+    /// Whether the energy's fall since [`fall_origin`](Self::fall_origin)
+    /// has slowed below [`SegmentParams::settle_rate`] ([`energy_fall_slowed`]).
+    fn energy_fall_slowed(&self) -> bool {
+        let since = &self.history[self.fall_origin.min(self.history.len())..];
+        energy_fall_slowed(since, self.params.settle_rate)
     }
 
     /// Whether a flip round (`round`: one after the first iteration that
@@ -927,15 +942,16 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// A quiet round that finds the energy on a plateau for
     /// [`quiet_round_plateau`](SegmentParams::quiet_round_plateau)
     /// iterations (by default half of
-    /// [`converge_plateau`](SegmentParams::converge_plateau)) ends the run
-    /// on the state after it.
+    /// [`converge_plateau`](SegmentParams::converge_plateau)), or its fall
+    /// slowed ([`SegmentParams::settle_rate`]), ends the run on the state
+    /// after it.
     fn judge_quiet_round(&mut self, energy: f64) {
         let needed = self
             .params
             .quiet_round_plateau
             .or_else(|| self.params.converge_plateau.map(|n| n.div_ceil(2)));
-        let on_plateau = needed.is_some_and(|n| self.since_new_low >= n)
-            || energy_fall_slowed(&self.history, self.params.settle_rate);
+        let on_plateau =
+            needed.is_some_and(|n| self.since_new_low >= n) || self.energy_fall_slowed();
         if self.params.converge_plateau.is_some() && on_plateau {
             self.quiet_round_on_plateau = true;
         }
@@ -1266,6 +1282,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             self.best_energy = f64::INFINITY;
             self.stalled = 0;
             self.since_new_low = 0;
+            self.fall_origin = self.history.len();
             self.quiet_round_on_plateau = false;
             self.step = self.params.step_fraction;
         }
@@ -1329,6 +1346,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             best_energy: self.best_energy,
             stalled: self.stalled,
             since_new_low: self.since_new_low,
+            fall_origin: self.fall_origin,
             quiet_iterations: self.quiet_iterations,
             quiet_round_on_plateau: self.quiet_round_on_plateau,
         }
@@ -1339,6 +1357,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.best_energy = p.best_energy;
         self.stalled = p.stalled;
         self.since_new_low = p.since_new_low;
+        self.fall_origin = p.fall_origin;
         self.quiet_iterations = p.quiet_iterations;
         self.quiet_round_on_plateau = p.quiet_round_on_plateau;
     }
@@ -1720,20 +1739,24 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     }
 }
 
-/// Whether the energy of `history` has fallen over its last
-/// [`SETTLE_SPAN`] iterations by less than `rate` times its fastest fall
-/// in one iteration: the interfaces have reached the data's edges, and
-/// what is left is the slow relaxation of noise-sized bumps
-/// ([`SegmentParams::settle_rate`]). Never with a `rate` of 0.
+/// Whether the energy of `history` has slowed its fall: over the last
+/// [`SETTLE_SPAN`] iterations it fell by less, per iteration, than `rate`
+/// times its fastest fall in one iteration. The interfaces have reached the
+/// data's edges, and what is left is the slow relaxation of noise-sized
+/// bumps ([`SegmentParams::settle_rate`]). Never with a `rate` of 0, nor on
+/// an energy that never fell.
 fn energy_fall_slowed(history: &[IterationRecord], rate: f64) -> bool {
     if rate <= 0.0 || history.len() <= SETTLE_SPAN {
         return false;
     }
-    let energy: Vec<f64> = history.iter().map(|r| r.energy).collect();
-    let fastest = energy.windows(2).map(|w| w[0] - w[1]).fold(0.0, f64::max);
-    let last = energy.len() - 1;
-    let recent = (energy[last - SETTLE_SPAN] - energy[last]) / SETTLE_SPAN as f64;
-    fastest > 0.0 && recent < rate * fastest
+    let fastest = history
+        .windows(2)
+        .map(|w| w[0].energy - w[1].energy)
+        .fold(0.0, f64::max);
+    let last = history.len() - 1;
+    let mean_recent =
+        (history[last - SETTLE_SPAN].energy - history[last].energy) / SETTLE_SPAN as f64;
+    fastest > 0.0 && mean_recent < rate * fastest
 }
 
 /// Whether one of `rules` would change a label

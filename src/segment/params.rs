@@ -87,6 +87,11 @@ pub const NEW_LOW_FRACTION_2D: f64 = 3e-4;
 /// 0.9688 (`docs/parameters.md`, "3D: fewer iterations").
 pub const NEW_LOW_FRACTION_3D: f64 = 1e-3;
 
+/// Whether a parameter is 0, which serde leaves out of the written parameters.
+fn is_zero(value: &f64) -> bool {
+    *value == 0.0
+}
+
 fn default_new_low_fraction() -> f64 {
     NEW_LOW_FRACTION_2D
 }
@@ -342,23 +347,28 @@ pub struct SegmentParams {
     pub new_low_fraction: f64,
     /// The iterations without a new low of the energy after which a quiet
     /// flip round ([`quiet_round_fraction`](Self::quiet_round_fraction))
-    /// ends the run; `None`: half of
+    /// ends the run (as does one after the energy's fall has slowed,
+    /// [`settle_rate`](Self::settle_rate)); `None`: half of
     /// [`converge_plateau`](Self::converge_plateau), rounded up. The
     /// coarse pass ([`coarse_pass`](Self::coarse_pass)) uses 0: its
     /// labels need only be close, and the run at full resolution moves the
     /// interfaces on.
     #[serde(default)]
     pub quiet_round_plateau: Option<usize>,
-    /// In runs with flip rounds, the rate of the energy's fall below which
-    /// the interfaces count as settled: once the energy has fallen over the
-    /// last 3 iterations by less than this fraction of its fastest fall in
-    /// one iteration, the settle round is due and a quiet flip round ends
-    /// the run, as on the energy plateau. A rate relative to the run's own
-    /// fall does not depend on the noise, whose variance sets the energy's
-    /// size and so the plateau's threshold. 0: only the plateau. 2D 0, 3D
-    /// [`SETTLE_RATE_3D`]; the coarse pass 0 (its end at its first quiet
-    /// round would come before its interfaces have travelled).
-    #[serde(default)]
+    /// In runs with flip rounds (a [`flip_interval`](Self::flip_interval)
+    /// above 1 and a [`converge_plateau`](Self::converge_plateau)), the rate
+    /// of the energy's fall below which the interfaces count as settled:
+    /// once the energy's mean fall per iteration over the last 3 is less
+    /// than this fraction of its fastest fall in one iteration (since the
+    /// start, the last re-seed or the last relabelling round), the settle
+    /// round is due and a quiet flip round ends the run, as on the energy
+    /// plateau. A rate relative to the run's own fall does not depend on the
+    /// noise, whose variance sets the energy's size and so the plateau's
+    /// threshold. 0: only the plateau. 2D 0, 3D [`SETTLE_RATE_3D`]; the
+    /// coarse pass 0 (its end at its first quiet round would come before
+    /// its interfaces have travelled). Not written when 0, so that the
+    /// parameters of runs without it read as before.
+    #[serde(default, skip_serializing_if = "is_zero")]
     pub settle_rate: f64,
     /// Whether layers of an intermediate phase as thin as the band a blurred
     /// edge leaves between two other phases are given back to those phases

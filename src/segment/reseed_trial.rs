@@ -59,6 +59,8 @@ pub struct RunProgress {
     pub stalled: usize,
     /// Iterations since the last new low.
     pub since_new_low: usize,
+    /// Where the settle rate's measure of the energy's fall begins.
+    pub fall_origin: usize,
     /// Quiet iterations in a row.
     pub quiet_iterations: usize,
     /// Whether a quiet flip round came on a plateau.
@@ -93,6 +95,7 @@ mod tests {
                 best_energy: energy,
                 stalled: 0,
                 since_new_low: 0,
+                fall_origin: 0,
                 quiet_iterations: 0,
                 quiet_round_on_plateau: false,
             },

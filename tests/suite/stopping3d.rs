@@ -1,7 +1,8 @@
 //! The 3D stopping rule around flip rounds: a plateau reached before the
 //! second flip round brings that round forward, a round that relabels only
 //! a few noise-sized cells along settled interfaces does not buy a further
-//! energy plateau, and one that comes on a plateau ends the run.
+//! energy plateau, and one that comes on a plateau ends the run; with the
+//! settle rate, an energy whose fall has slowed counts as the plateau.
 
 use crate::common::assert_valid;
 use dsc_seg::dim::D3;
