@@ -401,12 +401,12 @@ impl<K: Dim> Complex<K> {
             self.star_into(cand.keep, star);
             self.reclassify_cells(star);
         }
-        // (otherwise the cavity classified every corner of the new cells,
-        // the kept vertex in its new place among them: a vertex whose star
-        // lost or gained a cell is a corner of a new cell:
-        // off the domain boundary, an edge from the removed vertex has more
-        // cells around it than hold the kept vertex (two tets of three or
-        // more, one triangle of two), and the others become new cells)
+        // Otherwise nothing is left to classify: the cavity classified every
+        // corner of the new cells, the kept vertex among them, and every
+        // vertex whose star lost or gained a cell is such a corner. Off the
+        // domain boundary each edge from the removed vertex has cells around
+        // it that do not hold the kept vertex (at most two of its three or
+        // more tets do; one of its two triangles), and those become new cells.
         result
     }
 
