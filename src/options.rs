@@ -321,8 +321,8 @@ pub struct Segment3dOptions {
     #[arg(long, value_name = "N")]
     pub refine_start: Option<usize>,
     /// Stop when the stopping rule is met, without the fine finish (the
-    /// interfaces refined to L/2 for 2 more iterations with two phases;
-    /// with more, a last flip round, then L/2 for 5 iterations), which
+    /// interfaces refined to L/2 for 2 more iterations; with three or more
+    /// phases the first of them is a last flip round), which
     /// makes data differing by a re-quantisation give the same labels
     #[arg(long)]
     pub no_fine_finish: bool,

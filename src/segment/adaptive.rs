@@ -186,18 +186,27 @@ impl Finish {
         rigidity_factor: 1.0,
     };
 
-    /// The 3D default for three or more phases: a last flip round, then
-    /// interfaces at `L/2` for 5 iterations. The flip round gives back the
-    /// thin layers of intermediate phases that formed along blurred edges
-    /// since the regular round, before the finer cells fit them. On the 64³ three-phase phantom the
-    /// 64-level re-encoding then gives the 8-bit run's labels at Dice
-    /// 0.9906–0.9922 (0.9851–0.9882 without the finish), on the four-phase
-    /// one 0.9887–0.9899 at σ = 0.1; the Dice against the truth rose by
-    /// 0.0004–0.0082, at 1.5–1.8× the CPU time (benches/RESULTS.md,
-    /// "Encoding stability, 3D").
+    /// The 3D default for three or more phases: a last flip round, which
+    /// also refines the interfaces to `L/2`, then one move of the refined
+    /// surface (2 iterations, as with two phases). The flip round gives
+    /// back the thin layers of intermediate phases that formed along
+    /// blurred edges since the regular round, before the finer cells fit
+    /// them.
+    ///
+    /// Why 2 and not more: the refined surface's first move brings what the
+    /// finish gives the Dice against the truth, and later moves mostly
+    /// follow the noise. Read off each run's own per-iteration Dice on 30
+    /// three- and four-phase phantoms (48³–128³, σ 0.1 and 0.2), stopping
+    /// after 2 finish iterations instead of 5 gave −0.0012 to +0.0015
+    /// (higher on 20, lower on 8; the brain phantom −0.0010) for 9–27 % of
+    /// a run's time. The 64³ runs on 64-level re-encodings agree with the
+    /// 8-bit runs at Dice 0.9888–0.9917 (three phases) and 0.9805–0.9888
+    /// (four), 0.0007–0.0020 below the 5-iteration finish and above no
+    /// finish (0.9851–0.9882, 0.9821–0.9875) (benches/RESULTS.md, "Speed,
+    /// 3D", "A 2-iteration finish with three or more phases").
     pub const MULTIPHASE: Finish = Finish {
         interface_fraction: 0.5,
-        iterations: 5,
+        iterations: 2,
         flip_round: true,
         rigidity_factor: 1.0,
     };
