@@ -328,9 +328,9 @@ pub struct Segment3dOptions {
     pub no_fine_finish: bool,
     /// The fine finish's rigidity after its first iteration, as a multiple
     /// of the run's β: a stiffer refined surface rests closer to where two
-    /// runs on slightly different data put it (4 raised the 64³ three- and
-    /// four-phase phantoms' Dice and agreement but lowered the brain-like
-    /// phantom's) [default: 1]
+    /// runs on slightly different data put it (with a 5-iteration finish, 4
+    /// raised the 64³ three- and four-phase phantoms' Dice and agreement but
+    /// lowered the brain-like phantom's) [default: 1]
     #[arg(long, value_name = "F")]
     pub finish_rigidity: Option<f64>,
     /// Start from the mesh of the volume itself rather than from the final

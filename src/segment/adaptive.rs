@@ -120,8 +120,8 @@ pub struct SizingParams {
 /// With three or more phases the same holds, and the runs also part
 /// where the last flip round left a thin layer of an intermediate phase
 /// along a blurred edge: see [`Finish::MULTIPHASE`]. The runs do not part
-/// because they stop mid-motion: over the finish's last iterations their
-/// labels change by 0.06–0.2 % per iteration, and going on until nothing
+/// because they stop mid-motion: over the last iterations of a 5-iteration
+/// finish their labels changed by 0.06–0.2 % per iteration, and going on until nothing
 /// moves changed the
 /// agreement between two encodings by under 0.001; each run rests on a
 /// surface of its own, and a stiffer one at the end rests closer to the
@@ -150,11 +150,12 @@ pub struct Finish {
     /// different paths rest closer together. The first iteration keeps the
     /// run's β: after a flip round its relabelled cells leave jagged
     /// interfaces, which a stiff bending term moved by nearly `L` at once
-    /// (1.45× the CPU time of a 64³ three-phase run). 4 raised the Dice
-    /// against the truth and between encodings on all eight 64³ three-
-    /// and four-phase phantoms but lowered the brain phantom's from 0.9705
-    /// to 0.9668 (benches/RESULTS.md, "Encoding stability, 3D"), so both
-    /// defaults keep 1.
+    /// (1.45× the CPU time of a 64³ three-phase run). 4, measured with the
+    /// 5-iteration multiphase finish (four stiff iterations), raised the
+    /// Dice against the truth and between encodings on all eight 64³
+    /// three- and four-phase phantoms but lowered the brain phantom's from
+    /// 0.9705 to 0.9668 (benches/RESULTS.md, "Encoding stability, 3D"), so
+    /// both defaults keep 1.
     #[serde(default = "unit_factor")]
     pub rigidity_factor: f64,
 }
@@ -199,11 +200,12 @@ impl Finish {
     /// three- and four-phase phantoms (48³–128³, σ 0.1 and 0.2), stopping
     /// after 2 finish iterations instead of 5 gave −0.0012 to +0.0015
     /// (higher on 20, lower on 8; the brain phantom −0.0010) for 9–27 % of
-    /// a run's time. The 64³ runs on 64-level re-encodings agree with the
-    /// 8-bit runs at Dice 0.9888–0.9917 (three phases) and 0.9805–0.9888
-    /// (four), 0.0007–0.0020 below the 5-iteration finish and above no
-    /// finish (0.9851–0.9882, 0.9821–0.9875) (benches/RESULTS.md, "Speed,
-    /// 3D", "A 2-iteration finish with three or more phases").
+    /// the iterations' time. The 64³ runs on 64-level re-encodings agree
+    /// with the 8-bit runs at Dice 0.9888–0.9917 (three phases, above no
+    /// finish's 0.9851–0.9882) and 0.9805–0.9888 (four phases; at σ 0.2
+    /// 0.9805–0.9806, below no finish's 0.9821–0.9829), 0.0007–0.0020
+    /// below the 5-iteration finish (benches/RESULTS.md, "Speed, 3D", "A
+    /// 2-iteration finish with three or more phases").
     pub const MULTIPHASE: Finish = Finish {
         interface_fraction: 0.5,
         iterations: 2,

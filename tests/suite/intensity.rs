@@ -233,10 +233,11 @@ fn assert_64_levels_agree_on(ph: Phantom3, truth_at_least: f64) {
 /// run's labels too, once the volume has enough samples across: the runs
 /// part on single voxels along the interfaces, so their agreement falls
 /// with the interfaces' share of the volume. The three-phase volume at 96³
-/// agrees at 0.994–0.996, the four-phase one at 128³ at 0.992–0.996 (σ 0.1
-/// and 0.2); at 64³ the four-phase volume agrees
+/// agrees at 0.994–0.996, the four-phase one at 128³ at 0.991–0.995 (σ 0.1
+/// and 0.2, noise seeds 1 and 2); at 64³ the four-phase volume agrees
 /// at 0.98–0.99, as a 64² four-phase image does at 0.92–0.99
-/// (benches/RESULTS.md, "Encoding stability, 3D"). The default's fine
+/// (benches/RESULTS.md, "Encoding stability, 3D" and "Speed, 3D", "A
+/// 2-iteration finish with three or more phases"). The default's fine
 /// finish (a last flip round, then the interfaces at `L/2`) brings the runs
 /// together where they parted along blurred edges and at junctions.
 #[test]
@@ -246,10 +247,10 @@ fn a_three_phase_volume_with_64_levels_gives_the_same_labels() {
 
 /// Every re-encoding of the four-phase volume gives the 8-bit run's
 /// labels at 128³ (see
-/// [`a_three_phase_volume_with_64_levels_gives_the_same_labels`]). Even the
-/// exact ones part the runs a little, since the samples read back differ
-/// from the 8-bit ones in their last bits: at 48³ the offset one agreed at
-/// 0.985.
+/// [`a_three_phase_volume_with_64_levels_gives_the_same_labels`]): at
+/// 0.9913–0.9920 on this volume. Even the exact ones part the runs a
+/// little, since the samples read back differ from the 8-bit ones in their
+/// last bits: at 48³ the offset one agreed at 0.985.
 #[test]
 fn every_encoding_of_a_four_phase_volume_gives_the_same_labels() {
     let n = 128;
