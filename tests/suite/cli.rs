@@ -112,6 +112,21 @@ pub(crate) fn fails(sub: &Sub, args: &[&str], out: &Path, needle: &str) -> Strin
     err
 }
 
+/// `dsc-seg segment FILE` on the image file at `file`, in `d`, fails as
+/// [`fails`] checks, with `needle` in its one error line.
+fn segment_fails_on(d: &tempfile::TempDir, file: &Path, needle: &str) -> String {
+    fails(&SEGMENT, &[file.to_str().unwrap()], &empty_out(d), needle)
+}
+
+/// `dsc-seg segment` on a file named `name` holding `bytes` fails as
+/// [`fails`] checks, with `needle` in its one error line.
+fn segment_fails_on_bytes(name: &str, bytes: &[u8], needle: &str) -> String {
+    let d = tmp();
+    let p = d.path().join(name);
+    std::fs::write(&p, bytes).unwrap();
+    segment_fails_on(&d, &p, needle)
+}
+
 /// A directory this process cannot write into (mode 0o555), or `None` when
 /// permissions are not enforced (as for root), where the case cannot be tested.
 #[cfg(unix)]
@@ -264,56 +279,37 @@ fn missing_file() {
 
 #[test]
 fn not_an_image() {
-    let d = tmp();
-    let p = d.path().join("text.png");
-    std::fs::write(&p, "hello, not a picture").unwrap();
-    fails(
-        &SEGMENT,
-        &[p.to_str().unwrap()],
-        &empty_out(&d),
-        "not a readable image",
-    );
+    segment_fails_on_bytes("text.png", b"hello, not a picture", "not a readable image");
 }
 
 #[test]
 fn zero_size_image() {
-    let d = tmp();
     // a PNG signature and an IHDR chunk declaring 0×0
     let mut bytes = vec![0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
     bytes.extend([0, 0, 0, 13]);
     bytes.extend(b"IHDR");
     bytes.extend([0, 0, 0, 0, 0, 0, 0, 0, 8, 0, 0, 0, 0]);
     bytes.extend([0, 0, 0, 0]);
-    let p = d.path().join("empty.png");
-    std::fs::write(&p, bytes).unwrap();
-    fails(&SEGMENT, &[p.to_str().unwrap()], &empty_out(&d), "image");
+    segment_fails_on_bytes("empty.png", &bytes, "image");
 }
 
 #[test]
 fn truncated_png() {
     let d = tmp();
-    let good = write_image(d.path(), 32, 32);
-    let bytes = std::fs::read(&good).unwrap();
-    let p = d.path().join("cut.png");
-    std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
-    fails(
-        &SEGMENT,
-        &[p.to_str().unwrap()],
-        &empty_out(&d),
+    let bytes = std::fs::read(write_image(d.path(), 32, 32)).unwrap();
+    segment_fails_on_bytes(
+        "cut.png",
+        &bytes[..bytes.len() / 2],
         "cut.png is not a readable image",
     );
 }
 
 #[test]
 fn corrupt_tiff_header() {
-    let d = tmp();
-    let p = d.path().join("bad.tif");
     // Little-endian TIFF magic, then a first-IFD offset far past the end.
-    std::fs::write(&p, b"II*\0\xff\xff\xff\x7fgarbage").unwrap();
-    fails(
-        &SEGMENT,
-        &[p.to_str().unwrap()],
-        &empty_out(&d),
+    segment_fails_on_bytes(
+        "bad.tif",
+        b"II*\0\xff\xff\xff\x7fgarbage",
         "bad.tif is not a readable image",
     );
 }
@@ -326,19 +322,14 @@ fn constant_16_bit_png() {
     image::ImageBuffer::<image::Luma<u16>, _>::from_pixel(24, 24, image::Luma([40_000u16]))
         .save(&p)
         .unwrap();
-    fails(&SEGMENT, &[p.to_str().unwrap()], &empty_out(&d), "constant");
+    segment_fails_on(&d, &p, "constant");
 }
 
 #[test]
 fn one_pixel_image() {
     let d = tmp();
     let p = write_image(d.path(), 1, 1);
-    fails(
-        &SEGMENT,
-        &[p.to_str().unwrap()],
-        &empty_out(&d),
-        "at least 2×2",
-    );
+    segment_fails_on(&d, &p, "at least 2×2");
 }
 
 #[test]
@@ -695,12 +686,7 @@ fn a_tiff_stack_given_to_segment_points_to_segment3d() {
     let p = d.path().join("stack.tif");
     let data: Vec<u8> = (0..3 * 16 * 16).map(|i| (i % 7 * 30) as u8).collect();
     dsc_seg::io::save_labels_tiff(&p, [16, 16, 3], &data, None).unwrap();
-    fails(
-        &SEGMENT,
-        &[p.to_str().unwrap()],
-        &empty_out(&d),
-        "segment3d",
-    );
+    segment_fails_on(&d, &p, "segment3d");
 }
 
 #[test]
@@ -709,10 +695,9 @@ fn a_nifti_given_to_segment_points_to_segment3d() {
     let p = d.path().join("volume.nii.gz");
     let data: Vec<f32> = (0..4 * 4 * 3).map(|i| (i % 5) as f32).collect();
     dsc_seg::io::save_nifti(&p, &dsc_seg::io::Volume::from_raw(4, 4, 3, data)).unwrap();
-    fails(
-        &SEGMENT,
-        &[p.to_str().unwrap()],
-        &empty_out(&d),
+    segment_fails_on(
+        &d,
+        &p,
         "volume.nii.gz is a NIfTI volume of 4×4×3 voxels: `segment` reads 2D images, \
          segment it with `dsc-seg segment3d`",
     );
@@ -727,12 +712,7 @@ fn a_nifti_slice_thin_along_x_is_not_sent_to_segment3d() {
     let p = d.path().join("sagittal.nii.gz");
     let data: Vec<f32> = (0..8 * 8).map(|i| (i % 5) as f32).collect();
     dsc_seg::io::save_nifti(&p, &dsc_seg::io::Volume::from_raw(1, 8, 8, data)).unwrap();
-    let message = fails(
-        &SEGMENT,
-        &[p.to_str().unwrap()],
-        &empty_out(&d),
-        "thin axis the third",
-    );
+    let message = segment_fails_on(&d, &p, "thin axis the third");
     assert!(message.contains("one voxel thick along x"), "{message}");
     assert!(message.contains("fslswapdim IN y z x OUT"), "{message}");
     assert!(!message.contains("segment it with"), "{message}");
