@@ -50,8 +50,8 @@ pub struct EvolutionArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub min_move: Option<f64>,
     /// Also converged once the energy has not reached a new low (by 3·10⁻⁴
-    /// of itself) for N iterations; 0: only the displacement rule [default: 5
-    /// in 2D, 7 in 3D, 10 with --adaptive in 2D].
+    /// of itself in 2D, 10⁻³ in 3D) for N iterations; 0: only the
+    /// displacement rule [default: 5 in 2D, 7 in 3D, 10 with --adaptive in 2D].
     #[arg(long, value_name = "N")]
     pub converge_plateau: Option<usize>,
     /// A flip round that relabels fewer than this fraction of the cells is
