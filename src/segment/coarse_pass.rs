@@ -17,9 +17,11 @@
 //! the labels in place, the interfaces are close enough for the run at
 //! full resolution, which moves them on (on the brain-like phantom the
 //! pass's energy still fell slowly through 60 and more iterations). Its
-//! mesh covers the coarse image's domain, which is the full image's when
-//! every side is even (the coarse voxels twice the size); an odd side is
-//! rounded up and the mesh stretched back ([`Complex::stretch_to`]).
+//! mesh covers the coarse image's domain, which is the full image's: the
+//! coarse voxels are the side divided by their number (twice the voxel
+//! where a side is even; where it is odd the last one averages a single
+//! layer), and [`Complex::stretch_to`] puts the mesh exactly on the full
+//! domain against rounding.
 
 use super::driver::Segmentation;
 use super::image::ImageView;

@@ -1510,7 +1510,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// label flips are on: without them the interfaces travel the whole way
     /// from their start (the paper's single-region evolutions, a model
     /// pushing them), and a front crossing a region lowers the energy by
-    /// less per iteration than the plateau's 3·10⁻⁴ of it.
+    /// less per iteration than the plateau's new-low fraction of it.
     fn stopping_rule_met(&self) -> bool {
         let on_plateau = self.params.label_flips
             && (self

@@ -309,7 +309,8 @@ pub struct SegmentParams {
     /// ... and nothing flips, for this many iterations in a row.
     pub converge_iterations: usize,
     /// Also converged when the energy has not reached a new low (lower than
-    /// the lowest so far by 3·10⁻⁴ of itself, the test that halves the step)
+    /// the lowest so far by [`new_low_fraction`](Self::new_low_fraction) of
+    /// itself, the test that halves the step)
     /// for this many iterations in a row: the labelling and the interfaces
     /// no longer change the energy meaningfully, and under noise the largest
     /// displacement of the rule above only falls once the step has been
