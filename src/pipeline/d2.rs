@@ -5,7 +5,7 @@
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
     add_frame_and_phases, check_phantom, labels_of_samples, mean_dice, run_with_progress,
-    GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
+    warn_missed_objects, GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
 };
 use crate::dim::D2;
 use crate::error::{Error, Result};
@@ -457,6 +457,7 @@ pub(crate) fn segment_image_then<T>(
     let segment = t_seg.elapsed().as_secs_f64();
 
     let labels = seg.label_image();
+    warn_missed_objects(&seg, &view, &labels, &mut report);
     let (points, tris, phase) = overlay_arrays(&seg);
     let truth_dice = provenance
         .truth

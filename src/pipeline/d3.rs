@@ -6,7 +6,7 @@
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
     add_frame_and_phases, check_phantom, labels_of_samples, mean_dice, run_with_progress,
-    GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
+    warn_missed_objects, GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
 };
 use crate::dim::D3;
 use crate::error::{Error, Result};
@@ -304,10 +304,11 @@ pub(crate) fn segment_volume_then<T>(
         Some(path) => surface_segmentation(view, params.clone(), path)?,
     };
     let ready = ready()?;
-    let report = run_with_progress(&mut seg, params.max_iterations, quiet)?;
+    let mut report = run_with_progress(&mut seg, params.max_iterations, quiet)?;
     let segment_seconds = t_seg.elapsed().as_secs_f64();
 
     let labels = seg.label_image();
+    warn_missed_objects(&seg, &view, &labels, &mut report);
     let order = seg.phase_order();
     let complex = seg.complex();
     let truth_dice = provenance

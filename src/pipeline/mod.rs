@@ -29,6 +29,8 @@ pub use d3::{
 use crate::error::{Error, Result};
 use crate::io::Frame;
 use crate::segment::measurements::Measurements;
+use crate::segment::missed_objects::{missed_objects, MissedObjects};
+use crate::segment::ImageView;
 use crate::segment::{Raster, SegmentParams, SegmentReport, Segmentation};
 use crate::segmented::{Outputs, Segmented};
 use crate::staging::Staging;
@@ -263,6 +265,28 @@ pub(crate) fn run_with_progress<K: Raster>(
         return Err(Error::Interrupted);
     }
     Ok(report)
+}
+
+/// Adds to `report` a warning for each kind of object the result left
+/// inside another phase ([`missed_objects`]): structures smaller than the
+/// regularisation keeps, which no lost-phase check sees while their phase
+/// lives on elsewhere. `labels` are the output labels of `seg` over `image`.
+pub(crate) fn warn_missed_objects<K: Raster>(
+    seg: &Segmentation<'_, K>,
+    image: &ImageView<'_>,
+    labels: &[u8],
+    report: &mut SegmentReport,
+) {
+    let order = seg.phase_order();
+    let mut means = vec![None; order.len()];
+    for (label, &rank) in order.iter().enumerate() {
+        means[rank as usize] = report.final_means.get(label).copied().flatten();
+    }
+    let found = missed_objects(image, labels, &means, report.intensity.noise);
+    report
+        .warnings
+        .extend(found.iter().map(MissedObjects::warning));
+    report.missed_objects = found;
 }
 
 /// Checks the name, side and noise of a phantom `source` (2D, or 3D with

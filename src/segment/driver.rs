@@ -11,6 +11,7 @@ use super::graded_start::StartGrading;
 use super::image::ImageView;
 use super::integrate::{CellCache, CellStats, PhaseStats};
 use super::intensity::IntensityStats;
+use super::missed_objects::MissedObjects;
 use super::model::{Flow, IterationState, LabelRule, Models};
 use super::models::{GivenMesh, PaperField, RegionForce, Rigidity};
 use super::noise_correlation::correlated_noise_warning;
@@ -237,6 +238,10 @@ pub struct SegmentReport {
     /// [`SegmentParams::coarse_pass`]). `iterations` and `history` are the
     /// full-resolution run's.
     pub coarse_pass: Option<CoarsePassSummary>,
+    /// Objects of one phase the result left inside another, found in the
+    /// data against the output labels (filled by the pipeline, which
+    /// rasterises them; see [`missed_objects`](super::missed_objects)).
+    pub missed_objects: Vec<MissedObjects>,
 }
 
 /// A segmentation in progress: the complex, the image, the models of the
@@ -1665,6 +1670,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             cells: self.complex.cell_count(),
             sizes: self.adaptive.as_ref().map(AdaptiveSizing::sizes),
             coarse_pass: self.coarse_pass.clone(),
+            missed_objects: Vec::new(),
         }
     }
 

@@ -65,6 +65,7 @@ pub mod init;
 pub mod integrate;
 pub mod intensity;
 pub mod measurements;
+pub mod missed_objects;
 pub mod model;
 pub mod models;
 pub mod noise_correlation;

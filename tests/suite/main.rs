@@ -15,6 +15,7 @@ mod inputs;
 mod intensity;
 mod measures;
 mod messages;
+mod missed;
 mod physical;
 mod prop2d;
 mod report_units;

@@ -1,0 +1,105 @@
+//! Objects the regularisation leaves out are reported: small bright spots
+//! on a micrograph, which the length term removes while their phase lives
+//! on in the larger ones, come out as a warning and in the report; the
+//! benchmark phantoms, whose phases are all found, report none.
+
+use dsc_seg::io::Image2;
+use dsc_seg::phantom::shapes2d::two_phase;
+use dsc_seg::phantom::{Phantom2, RenderOptions};
+use dsc_seg::pipeline::{segment_image, Provenance};
+use dsc_seg::segment::SegmentParams;
+
+const SIDE: usize = 256;
+
+/// Disks of radius 2.5 px on a 12-px grid, with two large disks so that
+/// the bright phase lives on: levels 0.2 and 0.9, blur 1.5 px, noise 0.03.
+fn spots() -> Phantom2 {
+    let mut truth = vec![0u8; SIDE * SIDE];
+    let inside = |x: usize, y: usize, cx: f64, cy: f64, r: f64| {
+        let (dx, dy) = (x as f64 + 0.5 - cx, y as f64 + 0.5 - cy);
+        dx * dx + dy * dy <= r * r
+    };
+    for y in 0..SIDE {
+        for x in 0..SIDE {
+            let (gx, gy) = (x / 24, y / 24);
+            let spot = inside(x, y, gx as f64 * 24.0 + 12.0, gy as f64 * 24.0 + 12.0, 2.5);
+            let large = inside(x, y, 60.0, 200.0, 30.0) || inside(x, y, 190.0, 60.0, 25.0);
+            truth[y * SIDE + x] = u8::from(spot || large);
+        }
+    }
+    let mut opts = RenderOptions::new(0.03, 1);
+    opts.blur_px = 1.5;
+    Phantom2::from_labels(SIDE, SIDE, truth, &[0.2, 0.9], &opts)
+}
+
+/// How many 4-connected objects of phase 1 in `truth` hold no pixel
+/// labelled 1.
+fn objects_left_out(truth: &[u8], labels: &[u8]) -> usize {
+    let mut seen = vec![false; truth.len()];
+    let mut left_out = 0;
+    for start in 0..truth.len() {
+        if truth[start] != 1 || seen[start] {
+            continue;
+        }
+        let (mut stack, mut kept) = (vec![start], false);
+        seen[start] = true;
+        while let Some(i) = stack.pop() {
+            kept |= labels[i] == 1;
+            let (x, y) = (i % SIDE, i / SIDE);
+            let around = [
+                (x > 0).then(|| i - 1),
+                (x + 1 < SIDE).then(|| i + 1),
+                (y > 0).then(|| i - SIDE),
+                (y + 1 < SIDE).then(|| i + SIDE),
+            ];
+            for n in around.into_iter().flatten() {
+                if truth[n] == 1 && !seen[n] {
+                    seen[n] = true;
+                    stack.push(n);
+                }
+            }
+        }
+        left_out += usize::from(!kept);
+    }
+    left_out
+}
+
+#[test]
+fn spots_left_out_by_the_length_term_are_reported() {
+    let ph = spots();
+    let image = Image2::from_raw(SIDE, SIDE, ph.image.clone());
+    let seg = segment_image(&image, SegmentParams::new(2), Provenance::array(), true).unwrap();
+    let left_out = objects_left_out(&ph.truth, &seg.labels);
+    let missed = &seg.summary.missed_objects;
+    eprintln!("left out {left_out}, reported {missed:?}");
+    assert!(
+        left_out >= 10,
+        "the spots should be too small to keep: {left_out}"
+    );
+    assert_eq!(missed.len(), 1, "{missed:?}");
+    assert_eq!((missed[0].phase, missed[0].within), (1, 0));
+    // Every reported object is a spot left out; most spots left out are found.
+    assert!(
+        missed[0].count <= left_out && 2 * missed[0].count >= left_out,
+        "{missed:?}"
+    );
+    assert!(seg
+        .summary
+        .warnings
+        .iter()
+        .any(|w| w.contains("objects that look like phase 1")));
+}
+
+#[test]
+fn the_two_phase_phantom_reports_no_missed_objects() {
+    for noise in [0.1, 0.2] {
+        let ph = two_phase(SIDE, noise, 1);
+        let image = Image2::from_raw(SIDE, SIDE, ph.image.clone());
+        let seg = segment_image(&image, SegmentParams::new(2), Provenance::array(), true).unwrap();
+        assert!(
+            seg.summary.missed_objects.is_empty(),
+            "σ {noise}: {:?}",
+            seg.summary.missed_objects
+        );
+    }
+}
