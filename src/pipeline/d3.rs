@@ -136,6 +136,20 @@ fn load_label_volume(path: &Path, dims: [usize; 3], phases: usize) -> Result<Vec
     labels_of_samples(stored, phases, path)
 }
 
+/// A 2D image file (PNG, JPEG, BMP, ...) is not a volume: `segment3d` says
+/// which command takes it rather than calling its type unknown.
+fn refuse_image_file(path: &Path) -> Result<()> {
+    let volume_file = crate::io::volume::is_nifti(path) || crate::io::resolution::is_tiff(path);
+    if path.is_file() && !volume_file && image::ImageFormat::from_path(path).is_ok() {
+        return Err(Error::Usage(format!(
+            "{} is a 2D image, segment it with `dsc-seg segment` (`segment3d` reads a folder of \
+             slices, a multi-page TIFF or a NIfTI volume)",
+            path.display()
+        )));
+    }
+    Ok(())
+}
+
 /// A volume one voxel thick (a one-page TIFF, a NIfTI of one slice, a
 /// folder of one slice) is a 2D image: `segment3d` could only call it too
 /// thin to mesh, so it says which command takes it.
@@ -161,6 +175,7 @@ fn refuse_single_slice(path: &Path, volume: &Volume) -> Result<()> {
 pub fn load_volume(source: &Source) -> Result<(Volume, Option<GroundTruth>)> {
     match source {
         Source::File(path) => {
+            refuse_image_file(path)?;
             let volume = Volume::load(path)?;
             refuse_single_slice(path, &volume)?;
             Ok((volume, None))

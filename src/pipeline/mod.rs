@@ -271,12 +271,17 @@ pub(crate) fn run_with_progress<K: Raster>(
 /// inside another phase ([`missed_objects`]): structures smaller than the
 /// regularisation keeps, which no lost-phase check sees while their phase
 /// lives on elsewhere. `labels` are the output labels of `seg` over `image`.
+/// Not without label flips: a region evolved from the user's start claims
+/// only what it reaches.
 pub(crate) fn warn_missed_objects<K: Raster>(
     seg: &Segmentation<'_, K>,
     image: &ImageView<'_>,
     labels: &[u8],
     report: &mut SegmentReport,
 ) {
+    if !seg.params().label_flips {
+        return;
+    }
     let order = seg.phase_order();
     let mut means = vec![None; order.len()];
     for (label, &rank) in order.iter().enumerate() {
@@ -349,9 +354,14 @@ pub(crate) fn labels_of_samples(
             )));
         }
         if label >= phases as f64 {
+            let hint = if label < 16.0 {
+                format!("give --phases {} to use them all", label + 1.0)
+            } else {
+                "labels are phase numbers from 0, not a mask's 0/255".to_string()
+            };
             return Err(Error::Usage(format!(
                 "init labels {} use label {label}, but labels must be below the number of \
-                 phases ({phases})",
+                 phases ({phases}): {hint}",
                 path.display()
             )));
         }

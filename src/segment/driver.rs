@@ -1129,8 +1129,14 @@ impl<'a, K: Raster> Segmentation<'a, K> {
 
     /// The present phases not in `listed` that hold under a quarter of the
     /// pixels or voxels that look like them ([`super::absorbed`]; a pass
-    /// over the image at the end of a run).
+    /// over the image at the end of a run). None without label flips: a
+    /// region evolved from the user's start (the paper's single-region
+    /// evolutions) claims only what it reaches, and the pixels elsewhere
+    /// that look like it were never asked for.
     fn absorbed_phases(&self, listed: &[LostPhase]) -> Vec<LostPhase> {
+        if !self.params.label_flips {
+            return Vec::new();
+        }
         let mut by_rank: Vec<(usize, f64)> = (0..self.phases.count.len())
             .filter(|&l| self.phases.count[l] > 0)
             .filter_map(|l| self.phases.mean[l].map(|m| (l, m)))

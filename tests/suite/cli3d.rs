@@ -186,6 +186,18 @@ fn too_small_volumes() {
     let line = fails(&SEGMENT3D, &[p.to_str().unwrap()], &out, "12×12×1 voxels");
     assert!(line.contains("slice.tif"), "{line}");
     assert!(line.contains("segment it with `dsc-seg segment`"), "{line}");
+    // So is a PNG, which is not called a file of unknown type.
+    let png = d.path().join("photo.png");
+    image::GrayImage::from_pixel(12, 12, image::Luma([9]))
+        .save(&png)
+        .unwrap();
+    let line = fails(
+        &SEGMENT3D,
+        &[png.to_str().unwrap()],
+        &out,
+        "photo.png is a 2D image",
+    );
+    assert!(line.contains("segment it with `dsc-seg segment`"), "{line}");
     let nz2 = write_tiff(d.path(), "two.tif", [1, 1, 2], &[9, 9]);
     fails(
         &SEGMENT3D,

@@ -250,7 +250,8 @@ fn init_labels_are_read_as_the_file_stores_them() {
         &SEGMENT,
         &[image, "--init-labels", sixteen.to_str().unwrap()],
         &out,
-        "labels16.png use label 2, but labels must be below the number of phases (2)",
+        "labels16.png use label 2, but labels must be below the number of phases (2): give \
+         --phases 3 to use them all",
     );
 
     let float = d.path().join("labels.tif");

@@ -7,7 +7,7 @@ use dsc_seg::io::Image2;
 use dsc_seg::phantom::shapes2d::two_phase;
 use dsc_seg::phantom::{Phantom2, RenderOptions};
 use dsc_seg::pipeline::{segment_image, Provenance};
-use dsc_seg::segment::SegmentParams;
+use dsc_seg::segment::{Init, InitDisk, SegmentParams};
 
 const SIDE: usize = 256;
 
@@ -102,4 +102,36 @@ fn the_two_phase_phantom_reports_no_missed_objects() {
             seg.summary.missed_objects
         );
     }
+}
+
+#[test]
+fn a_region_evolved_without_flips_claims_only_what_it_reaches() {
+    // Grown from a disk on the first spot only (the paper's single-region
+    // evolution): the other spots and the large disks look like its phase
+    // and are not its to claim, so nothing is reported lost or missed.
+    let ph = spots();
+    let image = Image2::from_raw(SIDE, SIDE, ph.image.clone());
+    let mut params = SegmentParams::new(2);
+    params.label_flips = false;
+    params.max_iterations = 40;
+    params.init = Init::Disks(vec![InitDisk {
+        x: 60.0,
+        y: 200.0,
+        r: 10.0,
+        phase: 1,
+    }]);
+    let seg = segment_image(&image, params, Provenance::array(), true).unwrap();
+    assert!(
+        seg.summary.missed_objects.is_empty(),
+        "{:?}",
+        seg.summary.missed_objects
+    );
+    assert!(
+        seg.summary
+            .warnings
+            .iter()
+            .all(|w| !w.contains("look like")),
+        "{:?}",
+        seg.summary.warnings
+    );
 }
