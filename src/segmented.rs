@@ -9,7 +9,7 @@
 
 use crate::complex::{Complex2, Complex3};
 use crate::error::{Error, Result};
-use crate::io::resolution::{is_tiff, Resolution};
+use crate::io::resolution::{is_tiff, millimetres_per, Resolution};
 use crate::io::{
     save_gray8_png, save_gray8_png_with_pixel_size, save_labels_nifti, save_labels_tiff,
     write_bytes_atomic, write_pvd, write_vti, write_vtm,
@@ -408,10 +408,13 @@ impl Segmented {
     ) -> Result<()> {
         let (w, h) = (self.dims[0], self.dims[1]);
         if outputs.labels {
-            // The input's pixel size, when it had one in millimetres.
-            if self.frame.source != FrameSource::Default && self.frame.unit == "mm" {
+            // The input's pixel size, when it had one in a length unit.
+            let mm = millimetres_per(&self.frame.unit)
+                .filter(|_| self.frame.source != FrameSource::Default);
+            if let Some(mm) = mm {
                 let [sx, sy, _] = self.frame.spacing;
-                save_gray8_png_with_pixel_size(path("labels.png"), (w, h), &self.labels, [sx, sy])?;
+                let size = [sx * mm, sy * mm];
+                save_gray8_png_with_pixel_size(path("labels.png"), (w, h), &self.labels, size)?;
             } else {
                 save_gray8_png(path("labels.png"), w, h, &self.labels)?;
             }

@@ -630,7 +630,7 @@ pub(crate) fn lerp_nodes(c: f64, n: usize) -> (usize, usize, f32) {
 
 /// An error naming `path` if it is a file of 0 bytes (an interrupted copy
 /// or download), which the decoders would only call truncated.
-fn refuse_empty_file(path: &Path) -> Result<()> {
+pub(crate) fn refuse_empty_file(path: &Path) -> Result<()> {
     match std::fs::metadata(path) {
         Ok(m) if m.is_file() && m.len() == 0 => Err(IoError::NotAnImage {
             path: path.to_path_buf(),

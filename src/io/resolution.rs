@@ -115,6 +115,20 @@ pub fn tiff_resolution<R: Read + Seek>(dec: &mut tiff::decoder::Decoder<R>) -> O
     })
 }
 
+/// Millimetres in one `unit` (a [`Resolution`]'s short form), or `None`
+/// for a unit that is not a length (`"px"`) or not known.
+pub fn millimetres_per(unit: &str) -> Option<f64> {
+    match unit {
+        "mm" => Some(1.0),
+        "um" => Some(1e-3),
+        "nm" => Some(1e-6),
+        "cm" => Some(10.0),
+        "m" => Some(1e3),
+        "inch" => Some(25.4),
+        _ => None,
+    }
+}
+
 /// ImageJ's unit names in short form.
 fn imagej_unit(u: &str) -> String {
     match u {

@@ -201,6 +201,7 @@ impl Volume {
         if path.is_dir() {
             return Self::load_slices(path);
         }
+        super::image2::refuse_empty_file(path)?;
         if is_nifti(path) {
             Self::load_nifti(path)
         } else if super::resolution::is_tiff(path) {

@@ -160,7 +160,12 @@ fn corrupt_tiff() {
     let p = write(d.path(), "garbage.tif", b"II*\0garbage garbage garbage");
     fails(&SEGMENT3D, &[&p], &out, "garbage.tif: malformed TIFF");
     let p = write(d.path(), "empty.tif", b"");
-    fails(&SEGMENT3D, &[&p], &out, "empty.tif: malformed TIFF");
+    fails(
+        &SEGMENT3D,
+        &[&p],
+        &out,
+        "empty.tif is not a readable image: the file is empty",
+    );
     let good = write_tiff(d.path(), "good.tif", [12; 3], &values(12));
     let bytes = std::fs::read(good).unwrap();
     for cut in [8, 100, bytes.len() / 2, bytes.len() - 10] {

@@ -331,7 +331,7 @@ fn a_palette_of_grays_is_a_gray_image() {
     );
 }
 
-/// A file of 0 bytes is said to be empty, not truncated.
+/// A file of 0 bytes is said to be empty, not truncated, by both commands.
 #[test]
 fn an_empty_file_is_said_to_be_empty() {
     let d = tmp();
@@ -343,6 +343,13 @@ fn an_empty_file_is_said_to_be_empty() {
         &empty_out(&d),
         "nothing.png is not a readable image: the file is empty (0 bytes)",
     );
+    for name in ["nothing.tif", "nothing.nii.gz"] {
+        let p = d.path().join(name);
+        std::fs::write(&p, b"").unwrap();
+        let needle = format!("{name} is not a readable image: the file is empty (0 bytes)");
+        let out = d.path().join(format!("out_{name}"));
+        fails(&SEGMENT3D, &[p.to_str().unwrap()], &out, &needle);
+    }
 }
 
 /// An animated GIF is a sequence, not one image: refused rather than

@@ -230,3 +230,43 @@ fn labels_png_keeps_the_input_pixel_size() {
         (2000, 4000, png::Unit::Meter)
     );
 }
+
+/// labels.png carries a micrometre pixel size too: an ImageJ TIFF at 4
+/// pixels per micron gets 4 000 000 pixels per metre.
+#[test]
+fn labels_png_keeps_a_micrometre_pixel_size() {
+    use tiff::encoder::{colortype::Gray8, Rational, TiffEncoder};
+    use tiff::tags::{ResolutionUnit, Tag};
+    let d = tmp();
+    let path = d.path().join("micrograph.tif");
+    {
+        let pixels: Vec<u8> = square(32, 50.0, 200.0, 4.0)
+            .iter()
+            .map(|&v| v as u8)
+            .collect();
+        let mut enc = TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
+        let mut page = enc.new_image::<Gray8>(32, 32).unwrap();
+        page.encoder()
+            .write_tag(Tag::ImageDescription, "ImageJ=1.54f\nunit=micron\n")
+            .unwrap();
+        page.resolution(ResolutionUnit::None, Rational { n: 4, d: 1 });
+        page.write_data(&pixels).unwrap();
+    }
+    let out = d.path().join("o");
+    let o = bin()
+        .args(["segment", "--quiet", "--outputs", "labels", "--out"])
+        .arg(&out)
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let file = std::fs::File::open(out.join("labels.png")).unwrap();
+    let reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap();
+    let dims = reader.info().pixel_dims.expect("a pHYs chunk");
+    assert_eq!(
+        (dims.xppu, dims.yppu, dims.unit),
+        (4_000_000, 4_000_000, png::Unit::Meter)
+    );
+}
