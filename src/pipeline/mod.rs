@@ -29,7 +29,8 @@ pub use d3::{
 use crate::error::{Error, Result};
 use crate::io::Frame;
 use crate::segment::measurements::Measurements;
-use crate::segment::missed_objects::{missed_objects, MissedObjects};
+use crate::segment::missed_objects::{missed_objects, Noise};
+use crate::segment::params::MAX_PHASES;
 use crate::segment::ImageView;
 use crate::segment::{Raster, SegmentParams, SegmentReport, Segmentation};
 use crate::segmented::{Outputs, Segmented};
@@ -271,15 +272,15 @@ pub(crate) fn run_with_progress<K: Raster>(
 /// inside another phase ([`missed_objects`]): structures smaller than the
 /// regularisation keeps, which no lost-phase check sees while their phase
 /// lives on elsewhere. `labels` are the output labels of `seg` over `image`.
-/// Not without label flips: a region evolved from the user's start claims
-/// only what it reaches.
+/// Only where the result answers for the whole image
+/// ([`SegmentParams::claims_whole_image`]).
 pub(crate) fn warn_missed_objects<K: Raster>(
     seg: &Segmentation<'_, K>,
     image: &ImageView<'_>,
     labels: &[u8],
     report: &mut SegmentReport,
 ) {
-    if !seg.params().label_flips {
+    if !seg.params().claims_whole_image() {
         return;
     }
     let order = seg.phase_order();
@@ -287,11 +288,16 @@ pub(crate) fn warn_missed_objects<K: Raster>(
     for (label, &rank) in order.iter().enumerate() {
         means[rank as usize] = report.final_means.get(label).copied().flatten();
     }
-    let found = missed_objects(image, labels, &means, report.intensity.noise);
+    let noise = Noise {
+        sigma: report.intensity.noise,
+        correlation: report.intensity.noise_correlation,
+    };
+    let found = missed_objects(image, labels, &means, noise);
+    let three_d = image.dims[2] > 1;
     report
         .warnings
-        .extend(found.iter().map(MissedObjects::warning));
-    report.missed_objects = found;
+        .extend(found.iter().map(|m| m.warning(three_d)));
+    report.missed_objects = Some(found);
 }
 
 /// Checks the name, side and noise of a phantom `source` (2D, or 3D with
@@ -344,6 +350,7 @@ pub(crate) fn labels_of_samples(
     path: &Path,
 ) -> Result<Vec<u8>> {
     let mut labels = Vec::with_capacity(stored.size_hint().0);
+    let mut largest: f64 = 0.0;
     for v in stored {
         let label = v.round();
         if !(label >= 0.0 && (v - label).abs() <= 1e-3) {
@@ -353,19 +360,22 @@ pub(crate) fn labels_of_samples(
                 path.display()
             )));
         }
-        if label >= phases as f64 {
-            let hint = if label < 16.0 {
-                format!("give --phases {} to use them all", label + 1.0)
-            } else {
-                "labels are phase numbers from 0, not a mask's 0/255".to_string()
-            };
-            return Err(Error::Usage(format!(
-                "init labels {} use label {label}, but labels must be below the number of \
-                 phases ({phases}): {hint}",
-                path.display()
-            )));
-        }
-        labels.push(label as u8);
+        largest = largest.max(label);
+        labels.push(label.min(255.0) as u8);
+    }
+    if largest >= phases as f64 {
+        let hint = if largest == 255.0 {
+            "labels are phase numbers from 0, not a mask's 0/255".to_string()
+        } else if largest < MAX_PHASES as f64 {
+            format!("give --phases {} to use them all", largest + 1.0)
+        } else {
+            format!("at most {MAX_PHASES} phases")
+        };
+        return Err(Error::Usage(format!(
+            "init labels {} use label {largest}, but labels must be below the number of \
+             phases ({phases}): {hint}",
+            path.display()
+        )));
     }
     Ok(labels)
 }

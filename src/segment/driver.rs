@@ -240,8 +240,9 @@ pub struct SegmentReport {
     pub coarse_pass: Option<CoarsePassSummary>,
     /// Objects of one phase the result left inside another, found in the
     /// data against the output labels (filled by the pipeline, which
-    /// rasterises them; see [`missed_objects`](super::missed_objects)).
-    pub missed_objects: Vec<MissedObjects>,
+    /// rasterises them; see [`missed_objects`](super::missed_objects));
+    /// `None` when not looked for.
+    pub missed_objects: Option<Vec<MissedObjects>>,
 }
 
 /// A segmentation in progress: the complex, the image, the models of the
@@ -1129,12 +1130,10 @@ impl<'a, K: Raster> Segmentation<'a, K> {
 
     /// The present phases not in `listed` that hold under a quarter of the
     /// pixels or voxels that look like them ([`super::absorbed`]; a pass
-    /// over the image at the end of a run). None without label flips: a
-    /// region evolved from the user's start (the paper's single-region
-    /// evolutions) claims only what it reaches, and the pixels elsewhere
-    /// that look like it were never asked for.
+    /// over the image at the end of a run). Only where the result answers
+    /// for the whole image ([`SegmentParams::claims_whole_image`]).
     fn absorbed_phases(&self, listed: &[LostPhase]) -> Vec<LostPhase> {
-        if !self.params.label_flips {
+        if !self.params.claims_whole_image() {
             return Vec::new();
         }
         let mut by_rank: Vec<(usize, f64)> = (0..self.phases.count.len())
@@ -1676,7 +1675,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             cells: self.complex.cell_count(),
             sizes: self.adaptive.as_ref().map(AdaptiveSizing::sizes),
             coarse_pass: self.coarse_pass.clone(),
-            missed_objects: Vec::new(),
+            missed_objects: None,
         }
     }
 

@@ -9,15 +9,25 @@
 //! smoothed by a Gaussian of [`SMOOTHING`] pixels to keep single noisy
 //! pixels out, is classified pixel by pixel to the nearest final phase
 //! mean; a connected region (faces shared) of one class `c` that holds no
-//! pixel labelled `c`, and whose pixels and neighbours all carry one other
-//! label `j`, is a candidate. It counts as a missed object when its mean
+//! pixel labelled `c`, whose pixels and neighbours all carry one other
+//! label `j`, and whose neighbours look like `j` or like the blur between
+//! `c` and `j`, is a candidate. It counts as a missed object when its mean
 //! intensity, unsmoothed, lies nearer `c`'s mean than `j`'s and differs from
-//! `j`'s by at least [`MIN_SIGNIFICANCE`] standard errors of the noise: a
-//! cluster of noise rarely does both. A region touching several labels (the
-//! band a blurred edge leaves between two phases) is not counted: the
-//! absorbed- and band-phase checks judge those. Nor are phases whose means
-//! lie closer than [`MIN_GAP`] standard deviations of the smoothed noise:
-//! there the classes follow the noise.
+//! `j`'s by at least [`MIN_SIGNIFICANCE`] standard errors of the noise.
+//!
+//! A cluster of noise that crosses the midpoint in the smoothed image also
+//! has an unsmoothed mean leaning towards `c`, so the significance, which
+//! grows with the square root of the region's size, is the guard: it keeps
+//! out the clusters the noise makes, which are small where the two means
+//! lie far apart in units of the smoothed noise. Hence the other limits:
+//! phases closer than [`MIN_GAP`] smoothed-noise deviations are not judged
+//! (there the classes follow the noise); correlated noise (a neighbour
+//! correlation `ρ`, measured with the noise) widens the noise by
+//! `1/√(1 − ρ)` and shrinks the region's independent samples by
+//! `(1 − ρ)/(1 + ρ)`, and beyond [`MAX_CORRELATION`] (texture, smoothed
+//! noise: the run warns of it) nothing is judged. A region touching several
+//! labels (the band a blurred edge leaves between two phases) or beside a
+//! third class (a corner the length term rounded off) is not counted.
 
 use super::image::ImageView;
 use crate::phantom::blur::gaussian_blur_3d;
@@ -32,10 +42,23 @@ pub const SMOOTHING: f64 = 1.0;
 pub const MIN_SIGNIFICANCE: f64 = 8.0;
 
 /// How many standard deviations of the smoothed image's noise two phases'
-/// means must lie apart for its classes to tell them apart: closer means
-/// leave noise clusters of one inside the other (at half the gap a quarter
-/// of the pixels cross), and their unsmoothed means lean the same way.
+/// means must lie apart for its classes to tell them apart: at 6 a pixel
+/// of one crosses the midpoint with probability 0.13 %, at 3 with 6.7 %,
+/// and such clusters of noise grow large enough to pass the significance.
 pub const MIN_GAP: f64 = 6.0;
+
+/// The neighbour correlation of the noise beyond which the check is not
+/// made: the run's correlated-noise warning's threshold.
+pub const MAX_CORRELATION: f64 = super::noise_correlation::CORRELATED_NOISE_WARNING;
+
+/// The noise the check weighs regions against: the run's estimate.
+#[derive(Clone, Copy, Debug)]
+pub struct Noise {
+    /// Standard deviation from neighbouring samples' differences.
+    pub sigma: f64,
+    /// Neighbour correlation (`None`: not measured, taken as 0).
+    pub correlation: Option<f64>,
+}
 
 /// Objects of phase `phase` left inside phase `within` (output labels,
 /// ordered by increasing mean).
@@ -51,79 +74,95 @@ pub struct MissedObjects {
     pub pixels: usize,
     /// The largest one's.
     pub largest: usize,
+    /// The largest one's centre, in pixel or voxel indices (x, y, z).
+    pub largest_at: [f64; 3],
 }
 
 impl MissedObjects {
-    /// The warning a user reads.
-    pub fn warning(&self) -> String {
+    /// The warning a user reads; `three_d` names voxels and the 3D mesh's
+    /// finest size.
+    pub fn warning(&self, three_d: bool) -> String {
+        let (samples, at, finer) = if three_d {
+            let [x, y, z] = self.largest_at;
+            (
+                "voxels",
+                format!("({x:.0}, {y:.0}, {z:.0})"),
+                "--min-edge-length",
+            )
+        } else {
+            let [x, y, _] = self.largest_at;
+            ("pixels", format!("({x:.0}, {y:.0})"), "--edge-length")
+        };
+        let (objects, look, are) = if self.count == 1 {
+            ("object", "looks", "is")
+        } else {
+            ("objects", "look", "are")
+        };
         format!(
-            "{} objects that look like phase {} ({} pixels or voxels in all, the largest {}) \
-             are labelled phase {}, which surrounds them: they are smaller than the length \
-             weight and the edge length keep (lower --length-weight or --edge-length to keep them)",
+            "{} {objects} that {look} like phase {} ({} {samples} in all, the largest {} at \
+             {at}) {are} labelled phase {}, which surrounds them: smaller or narrower than the \
+             length weight and the mesh keep (a lower --length-weight or {finer} may keep them)",
             self.count, self.phase, self.pixels, self.largest, self.within
         )
     }
 }
 
 /// The missed objects of `labels` (output labels) over `image`, given each
-/// output label's final mean (`None`: an empty phase) and the noise's
-/// standard deviation; one entry per (phase, enclosing phase) pair, in
-/// label order.
+/// output label's final mean in increasing order (`None`: an empty phase)
+/// and the noise; one entry per (phase, enclosing phase) pair, in label
+/// order.
 pub fn missed_objects(
     image: &ImageView<'_>,
     labels: &[u8],
     means: &[Option<f64>],
-    noise: f64,
+    noise: Noise,
 ) -> Vec<MissedObjects> {
     let present: Vec<(u8, f64)> = means
         .iter()
         .enumerate()
         .filter_map(|(l, m)| m.map(|m| (l as u8, m)))
         .collect();
-    let noise_measured = noise.is_finite() && noise > 0.0;
-    if present.len() < 2 || !noise_measured || labels.len() != image.data.len() {
+    let rho = noise.correlation.unwrap_or(0.0).max(0.0);
+    if present.len() < 2 || labels.len() != image.data.len() || rho > MAX_CORRELATION {
         return Vec::new();
     }
+    // (a clean image's noise is 0: a floor well below any contrast)
+    let span = present.last().map_or(0.0, |l| l.1) - present[0].1;
+    let sigma = (noise.sigma / (1.0 - rho).sqrt()).max(1e-3 * span.abs());
+    if !sigma.is_finite() || sigma <= 0.0 {
+        return Vec::new();
+    }
+    let independent = (1.0 - rho) / (1.0 + rho);
+    let smoothed_sigma = sigma * smoothing_attenuation(image.dims);
     let [nx, ny, nz] = image.dims;
-    let smoothed_noise = noise * smoothing_attenuation(image.dims);
-    let smoothed = gaussian_blur_3d(image.data, nx, ny, nz, SMOOTHING);
-    let class: Vec<u8> = smoothed
+    let class: Vec<u8> = gaussian_blur_3d(image.data, nx, ny, nz, SMOOTHING)
         .iter()
         .map(|&v| nearest(&present, v as f64))
         .collect();
     let mut found: Vec<MissedObjects> = Vec::new();
     let mut seen = vec![false; labels.len()];
     let mut stack = Vec::new();
-    let mut region = Vec::new();
     for start in 0..labels.len() {
         if seen[start] {
             continue;
         }
-        region.clear();
         let c = class[start];
-        let Some(j) = grow(
-            start,
-            &class,
-            labels,
-            image.dims,
-            &mut seen,
-            &mut stack,
-            &mut region,
-        ) else {
+        let region = grow(start, &class, labels, image, &mut seen, &mut stack);
+        let Some(j) = region.enclosing else {
             continue;
         };
         let (Some(mc), Some(mj)) = (means[c as usize], means[j as usize]) else {
             continue;
         };
-        if (mc - mj).abs() < MIN_GAP * smoothed_noise {
+        if (mc - mj).abs() < MIN_GAP * smoothed_sigma {
             continue;
         }
-        let n = region.len() as f64;
-        let mean = region.iter().map(|&i| image.data[i] as f64).sum::<f64>() / n;
+        let n = region.count as f64;
+        let mean = region.sum / n;
         let nearer_c = (mean - mc).abs() < (mean - mj).abs();
-        let significance = (mean - mj).abs() * n.sqrt() / noise;
+        let significance = (mean - mj).abs() * (n * independent).sqrt() / sigma;
         if nearer_c && significance >= MIN_SIGNIFICANCE {
-            record(&mut found, c, j, region.len());
+            record(&mut found, c, j, &region);
         }
     }
     found.sort_by_key(|m| (m.phase, m.within));
@@ -145,22 +184,31 @@ fn nearest(present: &[(u8, f64)], v: f64) -> u8 {
         .map_or(0, |p| p.0)
 }
 
-/// Grows the face-connected region of `start`'s class `c` into `region`
-/// (and marks it seen); returns the one label `j` its pixels and their
+/// A connected region of one class: its size, unsmoothed sum and centre,
+/// and the one label around it ([`grow`]).
+struct Region {
+    count: usize,
+    sum: f64,
+    centre_sum: [f64; 3],
+    enclosing: Option<u8>,
+}
+
+/// Grows the face-connected region of `start`'s class `c` (and marks it
+/// seen). Its `enclosing` label `j` is the one its pixels and their
 /// neighbours outside it carry, or `None` if they carry several, if it is
-/// `c`, or if a neighbour's class lies outside the range from `c` to `j`:
-/// a lost object's neighbours look like `j` or like the blur between the
-/// two, while a region next to a brighter or darker class is the rim of
-/// something else (a corner the length term rounded off).
+/// `c`, or if a neighbour's class lies outside the range from `c` to `j`
+/// (classes are in the order of their means): a lost object's neighbours
+/// look like `j` or like the blur between the two, while a region next to
+/// a brighter or darker class is the rim of something else.
 fn grow(
     start: usize,
     class: &[u8],
     labels: &[u8],
-    dims: [usize; 3],
+    image: &ImageView<'_>,
     seen: &mut [bool],
     stack: &mut Vec<usize>,
-    region: &mut Vec<usize>,
-) -> Option<u8> {
+) -> Region {
+    let dims = image.dims;
     let c = class[start];
     let mut single: Option<u8> = None;
     let mut mixed = false;
@@ -170,10 +218,25 @@ fn grow(
         Some(s) if s != l => mixed = true,
         Some(_) => {}
     };
+    let mut region = Region {
+        count: 0,
+        sum: 0.0,
+        centre_sum: [0.0; 3],
+        enclosing: None,
+    };
     seen[start] = true;
     stack.push(start);
     while let Some(i) = stack.pop() {
-        region.push(i);
+        region.count += 1;
+        region.sum += f64::from(image.data[i]);
+        let (x, y, z) = (
+            i % dims[0],
+            (i / dims[0]) % dims[1],
+            i / (dims[0] * dims[1]),
+        );
+        for (s, v) in region.centre_sum.iter_mut().zip([x, y, z]) {
+            *s += v as f64;
+        }
         note(labels[i]);
         for n in face_neighbours(i, dims).into_iter().flatten() {
             if class[n] == c {
@@ -188,8 +251,10 @@ fn grow(
             }
         }
     }
-    let j = single.filter(|&j| !mixed && j != c)?;
-    (lowest >= c.min(j) && highest <= c.max(j)).then_some(j)
+    region.enclosing = single
+        .filter(|&j| !mixed && j != c)
+        .filter(|&j| lowest >= c.min(j) && highest <= c.max(j));
+    region
 }
 
 /// The up to six face neighbours of linear index `i` in a volume of `dims`
@@ -207,30 +272,44 @@ fn face_neighbours(i: usize, [nx, ny, nz]: [usize; 3]) -> [Option<usize>; 6] {
     ]
 }
 
-/// Adds one object of `pixels` to the (phase, within) entry of `found`.
-fn record(found: &mut Vec<MissedObjects>, phase: u8, within: u8, pixels: usize) {
-    match found
+/// Adds `region`, an object of `phase` inside `within`, to `found`.
+fn record(found: &mut Vec<MissedObjects>, phase: u8, within: u8, region: &Region) {
+    let centre = region.centre_sum.map(|s| s / region.count as f64);
+    let entry = match found
         .iter_mut()
         .find(|m| m.phase == phase && m.within == within)
     {
-        Some(m) => {
-            m.count += 1;
-            m.pixels += pixels;
-            m.largest = m.largest.max(pixels);
+        Some(m) => m,
+        None => {
+            found.push(MissedObjects {
+                phase,
+                within,
+                count: 0,
+                pixels: 0,
+                largest: 0,
+                largest_at: centre,
+            });
+            found.last_mut().expect("just pushed")
         }
-        None => found.push(MissedObjects {
-            phase,
-            within,
-            count: 1,
-            pixels,
-            largest: pixels,
-        }),
+    };
+    entry.count += 1;
+    entry.pixels += region.count;
+    if region.count > entry.largest {
+        entry.largest = region.count;
+        entry.largest_at = centre;
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn white(sigma: f64) -> Noise {
+        Noise {
+            sigma,
+            correlation: Some(0.0),
+        }
+    }
 
     /// A 64² background at 0.2 with bright 3×3 squares at 0.8, noise-free
     /// but for a deterministic ripple of ±0.05.
@@ -255,11 +334,11 @@ mod tests {
         let (data, _) = spots();
         let view = ImageView::new_2d(64, 64, &data).unwrap();
         let labels = vec![0u8; data.len()];
-        let found = missed_objects(&view, &labels, &[Some(0.2), Some(0.8)], 0.03);
+        let found = missed_objects(&view, &labels, &[Some(0.2), Some(0.8)], white(0.03));
         assert_eq!(found.len(), 1, "{found:?}");
         assert_eq!((found[0].phase, found[0].within, found[0].count), (1, 0, 4));
         assert!(found[0]
-            .warning()
+            .warning(false)
             .contains("4 objects that look like phase 1"));
     }
 
@@ -271,7 +350,7 @@ mod tests {
         for &(cx, cy) in &centres {
             labels[cy * 64 + cx] = 1;
         }
-        let found = missed_objects(&view, &labels, &[Some(0.2), Some(0.8)], 0.03);
+        let found = missed_objects(&view, &labels, &[Some(0.2), Some(0.8)], white(0.03));
         assert!(found.is_empty(), "{found:?}");
     }
 
@@ -293,7 +372,7 @@ mod tests {
             }
         }
         let view = ImageView::new_3d([n; 3], &data).unwrap();
-        let found = missed_objects(&view, &labels, &[Some(0.1), Some(0.9)], 0.02);
+        let found = missed_objects(&view, &labels, &[Some(0.1), Some(0.9)], white(0.02));
         assert_eq!(found.len(), 1, "{found:?}");
         assert_eq!((found[0].phase, found[0].within, found[0].count), (1, 0, 1));
     }
@@ -314,7 +393,49 @@ mod tests {
             .map(|i| if i % w <= 10 { 0 } else { 2 })
             .collect();
         let view = ImageView::new_2d(w, h, &data).unwrap();
-        let found = missed_objects(&view, &labels, &[Some(0.0), Some(0.5), Some(1.0)], 0.01);
+        let found = missed_objects(
+            &view,
+            &labels,
+            &[Some(0.0), Some(0.5), Some(1.0)],
+            white(0.01),
+        );
         assert!(found.is_empty(), "{found:?}");
+    }
+
+    #[test]
+    fn a_band_labelled_as_one_side_is_the_rim_of_the_other() {
+        // The same columns with the band labelled as its left side and the
+        // right side's first column too: the band touches one label only,
+        // but beside it lies a brighter class than either phase it joins.
+        let (w, h) = (21, 16);
+        let data: Vec<f32> = (0..w * h)
+            .map(|i| match i % w {
+                x if x < 10 => 0.0,
+                10 => 0.5,
+                _ => 1.0,
+            })
+            .collect();
+        let labels: Vec<u8> = (0..w * h)
+            .map(|i| if i % w <= 11 { 0 } else { 2 })
+            .collect();
+        let view = ImageView::new_2d(w, h, &data).unwrap();
+        let means = [Some(0.0), Some(0.5), Some(1.0)];
+        let found = missed_objects(&view, &labels, &means, white(0.01));
+        assert!(found.iter().all(|m| m.phase != 1), "{found:?}");
+    }
+
+    #[test]
+    fn a_clean_image_is_judged_and_correlated_noise_is_not() {
+        let (data, _) = spots();
+        let view = ImageView::new_2d(64, 64, &data).unwrap();
+        let labels = vec![0u8; data.len()];
+        let means = [Some(0.2), Some(0.8)];
+        let clean = missed_objects(&view, &labels, &means, white(0.0));
+        assert_eq!(clean.first().map(|m| m.count), Some(4), "{clean:?}");
+        let correlated = Noise {
+            sigma: 0.03,
+            correlation: Some(0.8),
+        };
+        assert!(missed_objects(&view, &labels, &means, correlated).is_empty());
     }
 }

@@ -802,6 +802,17 @@ impl SegmentParams {
         default_edge_length_of(dims, side, self.phases) * step
     }
 
+    /// Whether the result answers for every pixel or voxel, so that a class
+    /// the labels leave out anywhere is the run's loss: with label flips,
+    /// which relabel the whole image, or from a start that labels all of it
+    /// by intensity (histogram, range). A start the user drew (disks,
+    /// balls, a labelling) evolved without flips (the paper's single-region
+    /// evolutions) claims only what it reaches, and the pixels elsewhere
+    /// that look like its phase were never asked for.
+    pub fn claims_whole_image(&self) -> bool {
+        self.label_flips || matches!(self.init, Init::Histogram | Init::Range)
+    }
+
     /// These parameters for `phases` phases: the phase count replaced, and a
     /// length weight left at its default for the old count moved to the
     /// default for the new one (the defaults differ between two phases and more).
