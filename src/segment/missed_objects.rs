@@ -22,10 +22,10 @@
 //! lie far apart in units of the smoothed noise. Hence the other limits:
 //! phases closer than [`MIN_GAP`] smoothed-noise deviations are not judged
 //! (there the classes follow the noise); correlated noise (a neighbour
-//! correlation `ρ`, measured with the noise) widens the noise by
-//! `1/√(1 − ρ)` and shrinks the region's independent samples by
-//! `(1 − ρ)/(1 + ρ)`, and beyond [`MAX_CORRELATION`] (texture, smoothed
-//! noise: the run warns of it) nothing is judged. A region touching several
+//! correlation `ρ`, measured with the noise, at most [`MAX_CORRELATION`])
+//! widens the noise by `1/√(1 − ρ)` and shrinks the region's independent
+//! samples by `(1 − ρ)/(1 + ρ)`, so that the gap and the significance
+//! grow stricter as the noise grows smoother. A region touching several
 //! labels (the band a blurred edge leaves between two phases) or beside a
 //! third class (a corner the length term rounded off) is not counted.
 
@@ -47,9 +47,9 @@ pub const MIN_SIGNIFICANCE: f64 = 8.0;
 /// and such clusters of noise grow large enough to pass the significance.
 pub const MIN_GAP: f64 = 6.0;
 
-/// The neighbour correlation of the noise beyond which the check is not
-/// made: the run's correlated-noise warning's threshold.
-pub const MAX_CORRELATION: f64 = super::noise_correlation::CORRELATED_NOISE_WARNING;
+/// The largest neighbour correlation the noise is taken to have (a
+/// correlation of 1 would make every region's samples one).
+pub const MAX_CORRELATION: f64 = 0.95;
 
 /// The noise the check weighs regions against: the run's estimate.
 #[derive(Clone, Copy, Debug)]
@@ -122,8 +122,8 @@ pub fn missed_objects(
         .enumerate()
         .filter_map(|(l, m)| m.map(|m| (l as u8, m)))
         .collect();
-    let rho = noise.correlation.unwrap_or(0.0).max(0.0);
-    if present.len() < 2 || labels.len() != image.data.len() || rho > MAX_CORRELATION {
+    let rho = noise.correlation.unwrap_or(0.0).clamp(0.0, MAX_CORRELATION);
+    if present.len() < 2 || labels.len() != image.data.len() {
         return Vec::new();
     }
     // (a clean image's noise is 0: a floor well below any contrast)
@@ -425,16 +425,24 @@ mod tests {
     }
 
     #[test]
-    fn a_clean_image_is_judged_and_correlated_noise_is_not() {
+    fn a_clean_image_is_judged_and_smooth_noise_asks_more() {
         let (data, _) = spots();
         let view = ImageView::new_2d(64, 64, &data).unwrap();
         let labels = vec![0u8; data.len()];
         let means = [Some(0.2), Some(0.8)];
         let clean = missed_objects(&view, &labels, &means, white(0.0));
         assert_eq!(clean.first().map(|m| m.count), Some(4), "{clean:?}");
+        // The same noise, correlated, hides spots a tenth as contrasted.
+        let faint: Vec<f32> = data.iter().map(|&v| 0.2 + (v - 0.2) / 10.0).collect();
+        let view = ImageView::new_2d(64, 64, &faint).unwrap();
+        let means = [Some(0.2), Some(0.26)];
+        assert_eq!(
+            missed_objects(&view, &labels, &means, white(0.003)).len(),
+            1
+        );
         let correlated = Noise {
-            sigma: 0.03,
-            correlation: Some(0.8),
+            sigma: 0.003,
+            correlation: Some(0.9),
         };
         assert!(missed_objects(&view, &labels, &means, correlated).is_empty());
     }
