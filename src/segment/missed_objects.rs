@@ -143,7 +143,9 @@ pub fn missed_objects(
     let mut seen = vec![false; labels.len()];
     let mut stack = Vec::new();
     for start in 0..labels.len() {
-        if seen[start] {
+        // (a region holding its class's label is no object: only samples
+        // labelled otherwise than they look start or join one)
+        if seen[start] || class[start] == labels[start] {
             continue;
         }
         let c = class[start];
@@ -193,10 +195,12 @@ struct Region {
     enclosing: Option<u8>,
 }
 
-/// Grows the face-connected region of `start`'s class `c` (and marks it
-/// seen). Its `enclosing` label `j` is the one its pixels and their
-/// neighbours outside it carry, or `None` if they carry several, if it is
-/// `c`, or if a neighbour's class lies outside the range from `c` to `j`
+/// Grows the face-connected region of `start`'s class `c` among the samples
+/// not labelled `c` (and marks it seen). Its `enclosing` label `j` is the
+/// one its pixels and their neighbours outside it carry, or `None` if they
+/// carry several, if it is `c`, if the region touches a sample of its class
+/// labelled `c` (it is part of a region the labels kept), or if a
+/// neighbour's class lies outside the range from `c` to `j`
 /// (classes are in the order of their means): a lost object's neighbours
 /// look like `j` or like the blur between the two, while a region next to
 /// a brighter or darker class is the rim of something else.
@@ -212,6 +216,7 @@ fn grow(
     let c = class[start];
     let mut single: Option<u8> = None;
     let mut mixed = false;
+    let mut holds_own = false;
     let (mut lowest, mut highest) = (c, c);
     let mut note = |l: u8| match single {
         None => single = Some(l),
@@ -239,7 +244,9 @@ fn grow(
         }
         note(labels[i]);
         for n in face_neighbours(i, dims).into_iter().flatten() {
-            if class[n] == c {
+            if class[n] == c && labels[n] == c {
+                holds_own = true;
+            } else if class[n] == c {
                 if !seen[n] {
                     seen[n] = true;
                     stack.push(n);
@@ -252,7 +259,7 @@ fn grow(
         }
     }
     region.enclosing = single
-        .filter(|&j| !mixed && j != c)
+        .filter(|&j| !mixed && !holds_own && j != c)
         .filter(|&j| lowest >= c.min(j) && highest <= c.max(j));
     region
 }
