@@ -384,10 +384,10 @@ mod tests {
         assert_eq!((found[0].phase, found[0].within, found[0].count), (1, 0, 1));
     }
 
-    #[test]
-    fn a_band_between_two_phases_is_not_an_object() {
-        // Three columns of levels 0, 0.5 (a one-pixel band) and 1, the band
-        // labelled as its left neighbour: it touches both other labels.
+    /// Three columns of levels 0, 0.5 (a one-pixel band at x = 10) and 1,
+    /// 21 × 16 pixels, labelled 0 up to column `last_zero` and 2 after it:
+    /// what the check finds.
+    fn band_labelled_to(last_zero: usize) -> Vec<MissedObjects> {
         let (w, h) = (21, 16);
         let data: Vec<f32> = (0..w * h)
             .map(|i| match i % w {
@@ -397,37 +397,26 @@ mod tests {
             })
             .collect();
         let labels: Vec<u8> = (0..w * h)
-            .map(|i| if i % w <= 10 { 0 } else { 2 })
+            .map(|i| if i % w <= last_zero { 0 } else { 2 })
             .collect();
         let view = ImageView::new_2d(w, h, &data).unwrap();
-        let found = missed_objects(
-            &view,
-            &labels,
-            &[Some(0.0), Some(0.5), Some(1.0)],
-            white(0.01),
-        );
+        let means = [Some(0.0), Some(0.5), Some(1.0)];
+        missed_objects(&view, &labels, &means, white(0.01))
+    }
+
+    #[test]
+    fn a_band_between_two_phases_is_not_an_object() {
+        // The band labelled as its left neighbour: it touches both labels.
+        let found = band_labelled_to(10);
         assert!(found.is_empty(), "{found:?}");
     }
 
     #[test]
     fn a_band_labelled_as_one_side_is_the_rim_of_the_other() {
-        // The same columns with the band labelled as its left side and the
-        // right side's first column too: the band touches one label only,
-        // but beside it lies a brighter class than either phase it joins.
-        let (w, h) = (21, 16);
-        let data: Vec<f32> = (0..w * h)
-            .map(|i| match i % w {
-                x if x < 10 => 0.0,
-                10 => 0.5,
-                _ => 1.0,
-            })
-            .collect();
-        let labels: Vec<u8> = (0..w * h)
-            .map(|i| if i % w <= 11 { 0 } else { 2 })
-            .collect();
-        let view = ImageView::new_2d(w, h, &data).unwrap();
-        let means = [Some(0.0), Some(0.5), Some(1.0)];
-        let found = missed_objects(&view, &labels, &means, white(0.01));
+        // The band and the right side's first column labelled as the left
+        // side: the band touches one label only, but beside it lies a
+        // brighter class than either phase it joins.
+        let found = band_labelled_to(11);
         assert!(found.iter().all(|m| m.phase != 1), "{found:?}");
     }
 
