@@ -78,12 +78,14 @@ pub struct EvolutionArgs {
     /// disk of smaller radius) whose intensity differs from its surroundings
     /// by Δ, the smallest gap between adjacent initial phase means (not below
     /// twice the pixels' spread about their means, not above the mean gap),
-    /// costs more in boundary than
-    /// it gains in fit and is removed; one k times that contrast is kept down
-    /// to w/k² pixels. One pixel of boundary costs w·Δ²/2 of data energy, so
-    /// scaling or shifting the intensities changes nothing. Larger w:
-    /// smoother, fewer small regions [default: 1.6 for 2 phases, 5.5 for more;
-    /// 3D 0.6 and 1.2].
+    /// costs more in boundary than it gains in fit and is removed; one k times
+    /// that contrast is kept down to w/k² pixels. In practice the limit is
+    /// wider: an edge's blur lowers a narrow structure's gain, and a structure
+    /// much smaller than the cells (--edge-length) has none to hold it; the
+    /// run warns of the objects it left out. One pixel of boundary costs
+    /// w·Δ²/2 of data energy, so scaling or shifting the intensities changes
+    /// nothing. Larger w: smoother, fewer small regions [default: 1.6 for 2
+    /// phases, 5.5 for more; 3D 0.6 and 1.2].
     #[arg(long, allow_hyphen_values = true)]
     pub length_weight: Option<f64>,
     /// Adaptive resolution: a graded mesh, L at the interfaces, finer where
