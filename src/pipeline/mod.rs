@@ -205,10 +205,7 @@ impl<'a> RunReport<'a> {
         truth_dice: Option<f64>,
     ) -> Self {
         let order = seg.phase_order();
-        let mut ordered_means = vec![None; order.len()];
-        for (l, &rank) in order.iter().enumerate() {
-            ordered_means[rank as usize] = report.final_means.get(l).copied().flatten();
-        }
+        let ordered_means = ordered_means(&order, report);
         RunReport {
             tool,
             version: env!("CARGO_PKG_VERSION"),
@@ -268,6 +265,16 @@ pub(crate) fn run_with_progress<K: Raster>(
     Ok(report)
 }
 
+/// The run's final means by output value: mesh label `l`'s at `order[l]`
+/// ([`Segmentation::phase_order`]).
+fn ordered_means(order: &[u8], report: &SegmentReport) -> Vec<Option<f64>> {
+    let mut means = vec![None; order.len()];
+    for (label, &rank) in order.iter().enumerate() {
+        means[rank as usize] = report.final_means.get(label).copied().flatten();
+    }
+    means
+}
+
 /// Adds to `report` a warning for each kind of object the result left
 /// inside another phase ([`missed_objects`]): structures smaller than the
 /// regularisation keeps, which no lost-phase check sees while their phase
@@ -283,11 +290,7 @@ pub(crate) fn warn_missed_objects<K: Raster>(
     if !seg.params().claims_whole_image() {
         return;
     }
-    let order = seg.phase_order();
-    let mut means = vec![None; order.len()];
-    for (label, &rank) in order.iter().enumerate() {
-        means[rank as usize] = report.final_means.get(label).copied().flatten();
-    }
+    let means = ordered_means(&seg.phase_order(), report);
     let noise = Noise {
         sigma: report.intensity.noise,
         correlation: report.intensity.noise_correlation,
