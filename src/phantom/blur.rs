@@ -2,8 +2,8 @@
 //!
 //! The kernel matches `scipy.ndimage.gaussian_filter` with its default
 //! `truncate = 4.0` and `mode = "nearest"`: radius `⌊4σ + 0.5⌋`, weights
-//! `exp(-x² / 2σ²)` normalised to sum 1. Every pass is parallel over rows
-//! (rayon); sums are accumulated in `f64`.
+//! `exp(-x² / 2σ²)` normalised to sum 1. Every pass of a large image is
+//! parallel over rows (rayon); sums are accumulated in `f64`.
 
 use rayon::prelude::*;
 
@@ -34,7 +34,7 @@ pub fn gaussian_blur_2d(image: &[f32], width: usize, height: usize, sigma: f64) 
 /// `sigma <= 0` copies. Axes of extent 1 are skipped, so `nz = 1` is 2D.
 pub fn gaussian_blur_3d(image: &[f32], nx: usize, ny: usize, nz: usize, sigma: f64) -> Vec<f32> {
     let wide: Vec<f64> = image.iter().map(|&v| v as f64).collect();
-    gaussian_blur_3d_f64(&wide, nx, ny, nz, sigma)
+    blur_in_place(wide, [nx, ny, nz], sigma)
         .into_iter()
         .map(|v| v as f32)
         .collect()
@@ -49,14 +49,20 @@ pub fn gaussian_blur_3d_f64(
     nz: usize,
     sigma: f64,
 ) -> Vec<f64> {
+    blur_in_place(image.to_vec(), [nx, ny, nz], sigma)
+}
+
+/// The blur of `image`, an `nx × ny × nz` volume, in its own buffer and
+/// one other.
+fn blur_in_place(image: Vec<f64>, [nx, ny, nz]: [usize; 3], sigma: f64) -> Vec<f64> {
     assert_eq!(
         image.len(),
         nx * ny * nz,
         "image size does not match dimensions"
     );
     let kernel = gaussian_kernel(sigma);
-    let mut cur = image.to_vec();
-    if kernel.len() == 1 || image.is_empty() {
+    let mut cur = image;
+    if kernel.len() == 1 || cur.is_empty() {
         return cur;
     }
     let mut tmp = vec![0.0f64; cur.len()];
@@ -100,45 +106,52 @@ fn numpy_sum(a: &[f64]) -> f64 {
     }
 }
 
-/// One 1D pass along `axis` (0 = x, 1 = y, 2 = z); parallel over x-rows.
-/// The kernel is symmetric; samples are combined in SciPy's order
-/// (`w₀·c + Σ_{d=r..1} w_d·(left_d + right_d)`).
+/// Samples below which a pass runs on the calling thread: at 256² a pass
+/// takes about a tenth of a millisecond, about what waking rayon's workers
+/// costs on a 2-core machine.
+pub const PARALLEL_FROM: usize = 1 << 18;
+
+/// One 1D pass along `axis` (0 = x, 1 = y, 2 = z); parallel over x-rows
+/// from [`PARALLEL_FROM`] samples. The kernel is symmetric; samples are
+/// combined in SciPy's order (`w₀·c + Σ_{d=r..1} w_d·(left_d + right_d)`).
 fn blur_axis(src: &[f64], dst: &mut [f64], dims: [usize; 3], axis: usize, kernel: &[f64]) {
     let [nx, ny, nz] = dims;
     let r = kernel.len() / 2;
     let w0 = kernel[r];
-    match axis {
-        0 => {
-            dst.par_chunks_mut(nx)
-                .zip(src.par_chunks(nx))
-                .for_each_init(Vec::new, |padded, (out, row)| {
-                    blur_row(row, out, kernel, padded)
-                });
+    let (extent, stride_rows) = if axis == 1 { (ny, 1) } else { (nz, ny) };
+    let last = extent as isize - 1;
+    let pass = |padded: &mut Vec<f64>, (row, out): (usize, &mut [f64])| {
+        if axis == 0 {
+            return blur_row(&src[row * nx..(row + 1) * nx], out, kernel, padded);
         }
-        _ => {
-            let (extent, stride_rows) = if axis == 1 { (ny, 1) } else { (nz, ny) };
-            let last = extent as isize - 1;
-            dst.par_chunks_mut(nx).enumerate().for_each(|(row, out)| {
-                let (c, base) = if axis == 1 {
-                    (row % ny, row - row % ny)
-                } else {
-                    (row / ny, row % ny)
-                };
-                let line = |cc: isize| {
-                    let srow = base + cc.clamp(0, last) as usize * stride_rows;
-                    &src[srow * nx..(srow + 1) * nx]
-                };
-                let c = c as isize;
-                out.iter_mut().zip(line(c)).for_each(|(o, &v)| *o = v * w0);
-                for d in (1..=r).rev() {
-                    let (lo, hi) = (line(c - d as isize), line(c + d as isize));
-                    let w = kernel[r - d];
-                    for ((o, &a), &b) in out.iter_mut().zip(lo).zip(hi) {
-                        *o += (a + b) * w;
-                    }
-                }
-            });
+        let (c, base) = if axis == 1 {
+            (row % ny, row - row % ny)
+        } else {
+            (row / ny, row % ny)
+        };
+        let line = |cc: isize| {
+            let srow = base + cc.clamp(0, last) as usize * stride_rows;
+            &src[srow * nx..(srow + 1) * nx]
+        };
+        let c = c as isize;
+        out.iter_mut().zip(line(c)).for_each(|(o, &v)| *o = v * w0);
+        for d in (1..=r).rev() {
+            let (lo, hi) = (line(c - d as isize), line(c + d as isize));
+            let w = kernel[r - d];
+            for ((o, &a), &b) in out.iter_mut().zip(lo).zip(hi) {
+                *o += (a + b) * w;
+            }
         }
+    };
+    if dst.len() < PARALLEL_FROM {
+        let mut padded = Vec::new();
+        dst.chunks_mut(nx)
+            .enumerate()
+            .for_each(|entry| pass(&mut padded, entry));
+    } else {
+        dst.par_chunks_mut(nx)
+            .enumerate()
+            .for_each_init(Vec::new, pass);
     }
 }
 

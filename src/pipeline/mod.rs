@@ -295,7 +295,7 @@ pub(crate) fn warn_missed_objects<K: Raster>(
         sigma: report.intensity.noise,
         correlation: report.intensity.noise_correlation,
     };
-    let found = missed_objects(image, labels, &means, noise);
+    let found = missed_objects(image, seg.check_image(), labels, &means, noise);
     let three_d = image.dims[2] > 1;
     report
         .warnings

@@ -18,8 +18,6 @@
 //! six-disk phantom at σ 0.25, whose darkest disks sit 0.1 above a large
 //! background), the absorbed ones at most 0.16.
 
-use super::image::ImageView;
-use crate::phantom::blur::gaussian_blur_3d;
 
 /// Smallest share of the voxels that look like a phase it must hold.
 pub const ABSORBED_SHARE: f64 = 0.25;
@@ -39,16 +37,15 @@ pub struct Absorbed {
 
 /// The absorbed phases of a result whose phases, by increasing mean, have
 /// means `means` and hold `count` pixels or voxels (the present phases
-/// only): the segmentation's cell statistics give the counts, so no
-/// labelling of the image is needed.
-pub fn absorbed_by_count(image: &ImageView<'_>, count: &[u64], means: &[f64]) -> Vec<Absorbed> {
+/// only), over the image `smoothed` as the checks read it
+/// ([`CheckImage`](super::check_image::CheckImage)): the segmentation's cell
+/// statistics give the counts, so no labelling of the image is needed.
+pub fn absorbed_by_count(smoothed: &[f32], count: &[u64], means: &[f64]) -> Vec<Absorbed> {
     if means.len() < 2 || count.len() != means.len() {
         return Vec::new();
     }
-    let [nx, ny, nz] = image.dims;
-    let smoothed = gaussian_blur_3d(image.data, nx, ny, nz, 1.0);
     let mut looks_like = vec![0u64; means.len()];
-    for &value in &smoothed {
+    for &value in smoothed {
         if let Some(r) = middle_half_rank(means, value as f64) {
             looks_like[r] += 1;
         }
@@ -99,11 +96,14 @@ fn middle_half_rank(means: &[f64], value: f64) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::segment::check_image::CheckImage;
+    use crate::segment::image::ImageView;
 
     /// [`absorbed_by_count`] of a labelling: `ranks` gives each pixel's
     /// phase as its rank by increasing mean.
     fn absorbed_phases(image: &ImageView<'_>, ranks: &[u8], means: &[f64]) -> Vec<Absorbed> {
-        absorbed_by_count(image, &pixels_by_rank(ranks, means.len()), means)
+        let smoothed = CheckImage::default();
+        absorbed_by_count(smoothed.of(image), &pixels_by_rank(ranks, means.len()), means)
     }
 
     #[test]

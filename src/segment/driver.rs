@@ -1,6 +1,7 @@
 //! The iteration driver: integrate, flip, compute forces, deform, check convergence.
 
 use super::absorbed::{absorbed_by_count, pixels_by_rank};
+use super::check_image::CheckImage;
 use super::adaptive::{AdaptiveSizing, Sizes};
 use super::band_phase::{band_phases, range_counts, VoxelSize};
 use super::coarse_pass::{self, CoarsePassSummary};
@@ -266,6 +267,8 @@ pub struct Segmentation<'a, K: Raster> {
     cell_cache: CellCache<K>,
     /// The second thread of the short parallel sections of an iteration.
     helper: Helper,
+    /// The input as the checks after the run read it.
+    check_image: CheckImage,
     phases: PhaseStats,
     models: Models<K>,
     /// The force stage's fields, buffers and destinations.
@@ -436,12 +439,6 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         if let (Some(gap), Some(rigidity)) = (gap, models.force_mut::<Rigidity<K>>()) {
             rigidity.beta = contrast_rigidity(rigidity.beta, intensity.noise, gap);
         }
-        // (not on the adaptive mesh: it refines to resolve the detail a
-        // smoothed image would blur)
-        let smoothing = gap.filter(|_| !params.sizing.adaptive);
-        if let (Some(gap), Some(region)) = (smoothing, models.force_mut::<RegionForce<K>>()) {
-            region.sample_smoothed(&image, force_smoothing(intensity.noise, gap));
-        }
         let dsc = DscParams::new::<K>(l);
         let sizes = (params.sizing.adaptive).then(|| {
             let (extent, step) = (
@@ -457,10 +454,31 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         } else {
             0
         };
-        let mut complex = match given {
-            Some(c) => c,
-            None => K::box_complex(&image, sizes.map_or(l, |s| s.start))?,
-        };
+        let helper = Helper::new();
+        let check_image = CheckImage::default();
+        // The mesh on this thread; the smoothed images on the helper.
+        // (The force's smoothing is not on the adaptive mesh: it refines to
+        // resolve the detail a smoothed image would blur.)
+        let force_smoothing = gap
+            .filter(|_| !params.sizing.adaptive)
+            .map(|gap| force_smoothing(intensity.noise, gap));
+        let region = models.force_mut::<RegionForce<K>>();
+        let checks_now = K::N == 2 && params.claims_whole_image();
+        let (complex, ()) = helper.here().join(
+            || match given {
+                Some(c) => Ok(c),
+                None => K::box_complex(&image, sizes.map_or(l, |s| s.start)),
+            },
+            || {
+                if let (Some(sigma), Some(region)) = (force_smoothing, region) {
+                    region.sample_smoothed(&image, sigma);
+                }
+                if checks_now {
+                    check_image.of(&image);
+                }
+            },
+        );
+        let mut complex = complex?;
         let mut adaptive = sizes.map(|sizes| {
             let (lo, hi) = complex.domain();
             AdaptiveSizing::new::<K>(&params.sizing, sizes, lo, hi)
@@ -469,7 +487,6 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         // Through the cache: the initialisation relabels cells but rarely
         // moves them, so the first step finds them integrated already.
         let mut cell_cache = CellCache::new();
-        let helper = Helper::new();
         let mut deform_workspace = DscWorkspace::new();
         if let Some(sizing) = adaptive.as_mut().filter(|_| coarse_start && K::N == 2) {
             StartGrading {
@@ -532,6 +549,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             cells,
             cell_cache,
             helper,
+            check_image,
             phases,
             models,
             force,
@@ -678,6 +696,12 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// The parameters.
     pub fn params(&self) -> &SegmentParams {
         &self.params
+    }
+
+    /// The input smoothed as the checks after a run read it
+    /// ([`CheckImage`]), made now if no check has asked yet.
+    pub fn check_image(&self) -> &[f32] {
+        self.check_image.of(&self.image)
     }
 
     /// The parameters, to change mid-run. Changes take effect at the next
@@ -1154,7 +1178,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             pixels_by_rank(&self.label_image_with(&rank), count.len()),
             "the cells' pixel counts are the label image's"
         );
-        absorbed_by_count(&self.image, &count, &means)
+        absorbed_by_count(self.check_image.of(&self.image), &count, &means)
             .into_iter()
             .map(|a| LostPhase::Absorbed {
                 phase: by_rank[a.rank].0 as Label,

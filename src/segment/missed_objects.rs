@@ -6,8 +6,8 @@
 //! micrograph of small bright spots that removes every spot of a few pixels
 //! while the phase lives on in the larger ones, so no lost-phase check
 //! fires. This check looks for such objects in the data itself: the image,
-//! smoothed by a Gaussian of [`SMOOTHING`] pixels to keep single noisy
-//! pixels out, is classified pixel by pixel to the nearest final phase
+//! smoothed by a Gaussian of [`CHECK_SMOOTHING`] pixel to keep single noisy
+//! pixels out ([`CheckImage`](super::check_image::CheckImage)), is classified pixel by pixel to the nearest final phase
 //! mean; a connected region (faces shared) of one class `c` that holds no
 //! pixel labelled `c`, whose pixels and neighbours all carry one other
 //! label `j`, and whose neighbours look like `j` or like the blur between
@@ -29,13 +29,9 @@
 //! labels (the band a blurred edge leaves between two phases) or beside a
 //! third class (a corner the length term rounded off) is not counted.
 
+use super::check_image::CHECK_SMOOTHING;
 use super::image::ImageView;
-use crate::phantom::blur::gaussian_blur_3d;
 use serde::Serialize;
-
-/// Standard deviation, in pixels or voxels, of the smoothing before the
-/// pixels are classified.
-pub const SMOOTHING: f64 = 1.0;
 
 /// How many standard errors of the noise a region's mean must lie from the
 /// enclosing phase's mean to count.
@@ -107,12 +103,14 @@ impl MissedObjects {
     }
 }
 
-/// The missed objects of `labels` (output labels) over `image`, given each
-/// output label's final mean in increasing order (`None`: an empty phase)
-/// and the noise; one entry per (phase, enclosing phase) pair, in label
-/// order.
+/// The missed objects of `labels` (output labels) over `image`, which the
+/// checks read as `smoothed`
+/// ([`CheckImage`](super::check_image::CheckImage)), given each output
+/// label's final mean in increasing order (`None`: an empty phase) and the
+/// noise; one entry per (phase, enclosing phase) pair, in label order.
 pub fn missed_objects(
     image: &ImageView<'_>,
+    smoothed: &[f32],
     labels: &[u8],
     means: &[Option<f64>],
     noise: Noise,
@@ -123,7 +121,7 @@ pub fn missed_objects(
         .filter_map(|(l, m)| m.map(|m| (l as u8, m)))
         .collect();
     let rho = noise.correlation.unwrap_or(0.0).clamp(0.0, MAX_CORRELATION);
-    if present.len() < 2 || labels.len() != image.data.len() {
+    if present.len() < 2 || labels.len() != image.data.len() || smoothed.len() != labels.len() {
         return Vec::new();
     }
     // (a clean image's noise is 0: a floor well below any contrast)
@@ -134,8 +132,7 @@ pub fn missed_objects(
     }
     let independent = (1.0 - rho) / (1.0 + rho);
     let smoothed_sigma = sigma * smoothing_attenuation(image.dims);
-    let [nx, ny, nz] = image.dims;
-    let class: Vec<u8> = gaussian_blur_3d(image.data, nx, ny, nz, SMOOTHING)
+    let class: Vec<u8> = smoothed
         .iter()
         .map(|&v| nearest(&present, v as f64))
         .collect();
@@ -175,7 +172,7 @@ pub fn missed_objects(
 /// deviation: `(4π σ²)^(−d/4)` over the `d` axes longer than one sample.
 fn smoothing_attenuation(dims: [usize; 3]) -> f64 {
     let axes = dims.iter().filter(|&&n| n > 1).count() as f64;
-    (4.0 * std::f64::consts::PI * SMOOTHING * SMOOTHING).powf(-axes / 4.0)
+    (4.0 * std::f64::consts::PI * CHECK_SMOOTHING * CHECK_SMOOTHING).powf(-axes / 4.0)
 }
 
 /// The label among `present` whose mean is nearest `v`.
@@ -310,6 +307,17 @@ fn record(found: &mut Vec<MissedObjects>, phase: u8, within: u8, region: &Region
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::segment::check_image::CheckImage;
+
+    /// [`missed_objects`] with the checks' smoothed copy made here.
+    fn missed(
+        image: &ImageView<'_>,
+        labels: &[u8],
+        means: &[Option<f64>],
+        noise: Noise,
+    ) -> Vec<MissedObjects> {
+        missed_objects(image, CheckImage::default().of(image), labels, means, noise)
+    }
 
     fn white(sigma: f64) -> Noise {
         Noise {
@@ -341,7 +349,7 @@ mod tests {
         let (data, _) = spots();
         let view = ImageView::new_2d(64, 64, &data).unwrap();
         let labels = vec![0u8; data.len()];
-        let found = missed_objects(&view, &labels, &[Some(0.2), Some(0.8)], white(0.03));
+        let found = missed(&view, &labels, &[Some(0.2), Some(0.8)], white(0.03));
         assert_eq!(found.len(), 1, "{found:?}");
         assert_eq!((found[0].phase, found[0].within, found[0].count), (1, 0, 4));
         assert!(found[0]
@@ -357,7 +365,7 @@ mod tests {
         for &(cx, cy) in &centres {
             labels[cy * 64 + cx] = 1;
         }
-        let found = missed_objects(&view, &labels, &[Some(0.2), Some(0.8)], white(0.03));
+        let found = missed(&view, &labels, &[Some(0.2), Some(0.8)], white(0.03));
         assert!(found.is_empty(), "{found:?}");
     }
 
@@ -379,7 +387,7 @@ mod tests {
             }
         }
         let view = ImageView::new_3d([n; 3], &data).unwrap();
-        let found = missed_objects(&view, &labels, &[Some(0.1), Some(0.9)], white(0.02));
+        let found = missed(&view, &labels, &[Some(0.1), Some(0.9)], white(0.02));
         assert_eq!(found.len(), 1, "{found:?}");
         assert_eq!((found[0].phase, found[0].within, found[0].count), (1, 0, 1));
     }
@@ -401,7 +409,7 @@ mod tests {
             .collect();
         let view = ImageView::new_2d(w, h, &data).unwrap();
         let means = [Some(0.0), Some(0.5), Some(1.0)];
-        missed_objects(&view, &labels, &means, white(0.01))
+        missed(&view, &labels, &means, white(0.01))
     }
 
     #[test]
@@ -426,20 +434,20 @@ mod tests {
         let view = ImageView::new_2d(64, 64, &data).unwrap();
         let labels = vec![0u8; data.len()];
         let means = [Some(0.2), Some(0.8)];
-        let clean = missed_objects(&view, &labels, &means, white(0.0));
+        let clean = missed(&view, &labels, &means, white(0.0));
         assert_eq!(clean.first().map(|m| m.count), Some(4), "{clean:?}");
         // The same noise, correlated, hides spots a tenth as contrasted.
         let faint: Vec<f32> = data.iter().map(|&v| 0.2 + (v - 0.2) / 10.0).collect();
         let view = ImageView::new_2d(64, 64, &faint).unwrap();
         let means = [Some(0.2), Some(0.26)];
         assert_eq!(
-            missed_objects(&view, &labels, &means, white(0.003)).len(),
+            missed(&view, &labels, &means, white(0.003)).len(),
             1
         );
         let correlated = Noise {
             sigma: 0.003,
             correlation: Some(0.9),
         };
-        assert!(missed_objects(&view, &labels, &means, correlated).is_empty());
+        assert!(missed(&view, &labels, &means, correlated).is_empty());
     }
 }

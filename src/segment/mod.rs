@@ -50,6 +50,7 @@ pub mod auto;
 pub mod band_flips;
 pub mod band_phase;
 pub mod censored;
+pub mod check_image;
 pub mod cluster_flips;
 pub mod coarse_pass;
 pub mod contrast;
