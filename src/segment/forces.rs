@@ -59,14 +59,6 @@ struct Acc<P> {
 }
 
 impl<P: Point> Acc<P> {
-    /// Empties the accumulator. The per-slot arrays are only read below
-    /// `np` and are zeroed when a slot opens, so they are left as they are
-    /// (every interface vertex is reset every iteration).
-    fn reset(&mut self) {
-        self.np = 0;
-        self.ext = P::zero();
-        self.share = 0.0;
-    }
     fn slot_of(&self, l: Label) -> Option<usize> {
         self.phases[..self.np].iter().position(|&p| p == l)
     }
@@ -85,6 +77,15 @@ impl<P: Point> Acc<P> {
             None
         }
     }
+}
+
+/// Marks a vertex without sums in [`ForceField::acc`] (not on the interface).
+const NO_ACC: u32 = u32::MAX;
+
+/// The sums of vertex `v` in `acc` (`acc_of` its index there), if it has
+/// any.
+fn acc_at<'a, P>(acc: &'a mut [Acc<P>], acc_of: &[u32], v: VertexId) -> Option<&'a mut Acc<P>> {
+    acc.get_mut(*acc_of.get(v.index())? as usize)
 }
 
 /// One interface facet, kept between the passes.
@@ -117,7 +118,11 @@ pub struct ForceSettings {
 pub struct ForceField<K: Dim> {
     /// Per vertex id: what it is for the forces.
     kinds: Vec<ForceKind>,
-    /// Per vertex id: sums of the interface vertices (valid where `kinds` is not `Off`).
+    /// Per vertex id: the index in `acc` of an interface vertex's sums
+    /// ([`NO_ACC`] where `kinds` is `Off`).
+    acc_of: Vec<u32>,
+    /// The sums of the interface vertices, in increasing vertex id: only
+    /// they have any, so the memory follows the interface, not the mesh.
     acc: Vec<Acc<K::Point>>,
     /// External (region) force per vertex id, dimensionless for eq. (6).
     pub external: Vec<K::Point>,
@@ -131,7 +136,8 @@ pub struct ForceField<K: Dim> {
     sampled: FacetSamples<K::Point>,
     /// Vertices the boundary Laplacian acts on (on the interface, off the border).
     active: Vec<u32>,
-    /// Per-vertex, per-phase neighbour sums of the boundary Laplacian.
+    /// Per interface vertex (as `acc`), per-phase neighbour sums of the
+    /// boundary Laplacian.
     slot_sums: Vec<[K::Point; MAXP]>,
     scratch: Vec<K::Point>,
     classify: ClassifyScratch,
@@ -146,6 +152,7 @@ impl<K: Raster> ForceField<K> {
     pub fn new() -> Self {
         ForceField {
             kinds: Vec::new(),
+            acc_of: Vec::new(),
             acc: Vec::new(),
             external: Vec::new(),
             bending: Vec::new(),
@@ -185,9 +192,9 @@ impl<K: Raster> ForceField<K> {
         self.resolve_external(s.junction);
     }
 
-    /// Stage 1: every vertex's [`ForceKind`]; the accumulators of the
-    /// interface vertices reset (junction slots in increasing label order,
-    /// for eq. 7) and the output arrays zeroed.
+    /// Stage 1: every vertex's [`ForceKind`]; an empty accumulator for each
+    /// interface vertex (junction slots in increasing label order, for
+    /// eq. 7) and the output arrays zeroed.
     fn classify_vertices(&mut self, complex: &Complex<K>) {
         let nv = complex.vertex_capacity();
         let empty = Acc {
@@ -199,7 +206,9 @@ impl<K: Raster> ForceField<K> {
             ext: K::Point::zero(),
             share: 0.0,
         };
-        self.acc.resize(nv, empty);
+        self.acc.clear();
+        self.acc_of.clear();
+        self.acc_of.resize(nv, NO_ACC);
         for buf in [&mut self.external, &mut self.bending, &mut self.stretching] {
             buf.clear();
             buf.resize(nv, K::Point::zero());
@@ -229,18 +238,18 @@ impl<K: Raster> ForceField<K> {
         for i in 0..nv {
             let kind = self.kinds[i];
             if kind == ForceKind::Off {
-                // Only the interface's accumulators are read: the rest of
-                // them (most) are not touched, nor reset.
                 continue;
             }
-            self.acc[i].reset();
+            self.acc_of[i] = self.acc.len() as u32;
+            self.acc.push(empty);
             match kind {
                 ForceKind::TripleJunction => {
                     self.junctions.0 += 1;
                     // slots in increasing label order, for eq. (7)
                     let labels = self.classify.star_labels(complex, VertexId(i as u32));
+                    let acc = self.acc.last_mut().expect("just pushed");
                     for &l in labels {
-                        self.acc[i].slot(l);
+                        acc.slot(l);
                     }
                 }
                 ForceKind::Crossing => self.junctions.1 += 1,
@@ -339,7 +348,9 @@ impl<K: Raster> ForceField<K> {
                 if p == q {
                     continue;
                 }
-                let acc = &mut self.acc[corners[p].index()];
+                let Some(acc) = acc_at(&mut self.acc, &self.acc_of, corners[p]) else {
+                    continue;
+                };
                 for l in [a, b] {
                     if let Some(sl) = acc.slot(l) {
                         acc.ncnt[sl] += 1.0;
@@ -349,8 +360,8 @@ impl<K: Raster> ForceField<K> {
         }
         // outward normals per phase at junctions
         for corner in corners.iter().take(nf) {
-            let acc = &mut self.acc[corner.index()];
             if self.kinds[corner.index()] == ForceKind::TripleJunction {
+                let acc = &mut self.acc[self.acc_of[corner.index()] as usize];
                 if let Some(sa) = acc.slot(a) {
                     acc.normal[sa] += normal * meas;
                 }
@@ -380,7 +391,7 @@ impl<K: Raster> ForceField<K> {
             corners, normal, ..
         } = *facet;
         let gap = ma - mb;
-        let (acc, kinds) = (&mut self.acc, &self.kinds);
+        let (acc, acc_of, kinds) = (&mut self.acc, &self.acc_of, &self.kinds);
         for sample in samples {
             let intensity = sample.intensity;
             let f = match s.model {
@@ -389,8 +400,12 @@ impl<K: Raster> ForceField<K> {
             };
             for k in 0..nf {
                 let wk = sample.weights[k] * sample.ds;
-                let ac = &mut acc[corners[k].index()];
-                match kinds[corners[k].index()] {
+                let kind = kinds[corners[k].index()];
+                if kind == ForceKind::Off {
+                    continue;
+                }
+                let ac = &mut acc[acc_of[corners[k].index()] as usize];
+                match kind {
                     ForceKind::Interface => {
                         ac.ext += normal * (f * wk);
                         ac.share += wk;
@@ -442,11 +457,12 @@ impl<K: Raster> ForceField<K> {
     /// junction the eq. (7) weights along the phases' outward normals.
     fn resolve_external(&mut self, junction: JunctionForce) {
         for i in 0..self.kinds.len() {
-            let acc = &self.acc[i];
+            if self.kinds[i] == ForceKind::Off {
+                continue;
+            }
+            let acc = &self.acc[self.acc_of[i] as usize];
             let mut f = K::Point::zero();
-            // (Off first: the other vertices' accumulators are stale)
             match self.kinds[i] {
-                ForceKind::Off => continue,
                 ForceKind::Interface if acc.share > 0.0 => f += acc.ext * (1.0 / acc.share),
                 ForceKind::TripleJunction
                     if acc.share > 0.0 && junction == JunctionForce::EdgeLocal =>
@@ -475,8 +491,11 @@ impl<K: Raster> ForceField<K> {
     fn fill_facet_slots(&mut self) {
         for f in &mut self.facets {
             for p in 0..K::N {
-                let acc = &self.acc[f.corners[p].index()];
-                f.slots[p] = [f.a, f.b].map(|l| acc.slot_of(l).map(|sl| sl as u8));
+                let acc = self.acc_of[f.corners[p].index()];
+                f.slots[p] = match self.acc.get(acc as usize) {
+                    Some(acc) => [f.a, f.b].map(|l| acc.slot_of(l).map(|sl| sl as u8)),
+                    None => [None; 2],
+                };
             }
         }
     }
@@ -490,16 +509,15 @@ impl<K: Raster> ForceField<K> {
     /// direction. Written into `out` at those vertices only.
     fn boundary_laplacian(&mut self, input: impl Fn(usize) -> K::Point, out: &mut [K::Point]) {
         let nf = K::N;
+        self.slot_sums.clear();
         self.slot_sums
             .resize(self.acc.len(), [K::Point::zero(); MAXP]);
         for f in &self.facets {
-            for c in &f.corners[..nf] {
-                self.slot_sums[c.index()] = [K::Point::zero(); MAXP];
-            }
-        }
-        for f in &self.facets {
             for p in 0..nf {
-                let sums = &mut self.slot_sums[f.corners[p].index()];
+                let Some(sums) = self.slot_sums.get_mut(self.acc_of[f.corners[p].index()] as usize)
+                else {
+                    continue;
+                };
                 for q in (0..nf).filter(|&q| q != p) {
                     let x = input(f.corners[q].index());
                     for sl in f.slots[p].iter().flatten() {
@@ -510,7 +528,8 @@ impl<K: Raster> ForceField<K> {
         }
         for &i in &self.active {
             let i = i as usize;
-            let (acc, sums, x) = (&self.acc[i], &self.slot_sums[i], input(i));
+            let a = self.acc_of[i] as usize;
+            let (acc, sums, x) = (&self.acc[a], &self.slot_sums[a], input(i));
             let mut lap = K::Point::zero();
             let mut m = 0.0;
             for (&sum, &count) in sums.iter().zip(&acc.ncnt).take(acc.np) {
