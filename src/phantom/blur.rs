@@ -33,11 +33,7 @@ pub fn gaussian_blur_2d(image: &[f32], width: usize, height: usize, sigma: f64) 
 /// (standard deviation `sigma` voxels, clamp border). Returns a new volume;
 /// `sigma <= 0` copies. Axes of extent 1 are skipped, so `nz = 1` is 2D.
 pub fn gaussian_blur_3d(image: &[f32], nx: usize, ny: usize, nz: usize, sigma: f64) -> Vec<f32> {
-    let wide: Vec<f64> = image.iter().map(|&v| v as f64).collect();
-    blur_in_place(wide, [nx, ny, nz], sigma)
-        .into_iter()
-        .map(|v| v as f32)
-        .collect()
+    blur(image, [nx, ny, nz], sigma)
 }
 
 /// [`gaussian_blur_3d`] on `f64` samples (used by the phantom renderer so
@@ -49,32 +45,67 @@ pub fn gaussian_blur_3d_f64(
     nz: usize,
     sigma: f64,
 ) -> Vec<f64> {
-    blur_in_place(image.to_vec(), [nx, ny, nz], sigma)
+    blur(image, [nx, ny, nz], sigma)
 }
 
-/// The blur of `image`, an `nx × ny × nz` volume, in its own buffer and
-/// one other.
-fn blur_in_place(image: Vec<f64>, [nx, ny, nz]: [usize; 3], sigma: f64) -> Vec<f64> {
+/// A sample type the passes read and write; they sum in `f64` either way.
+trait Sample: Copy + Send + Sync {
+    fn wide(self) -> f64;
+    fn narrow(v: f64) -> Self;
+}
+
+impl Sample for f32 {
+    fn wide(self) -> f64 {
+        self as f64
+    }
+    fn narrow(v: f64) -> Self {
+        v as f32
+    }
+}
+
+impl Sample for f64 {
+    fn wide(self) -> f64 {
+        self
+    }
+    fn narrow(v: f64) -> Self {
+        v
+    }
+}
+
+/// The blur of `image`, an `nx × ny × nz` volume: the first pass reads the
+/// input and the last writes the output in their own type, the passes
+/// between them keep `f64` (so an `f32` image is blurred as its `f64` copy
+/// would be, to the bit, without the copy).
+fn blur<S: Sample>(image: &[S], [nx, ny, nz]: [usize; 3], sigma: f64) -> Vec<S> {
     assert_eq!(
         image.len(),
         nx * ny * nz,
         "image size does not match dimensions"
     );
+    let dims = [nx, ny, nz];
     let kernel = gaussian_kernel(sigma);
-    let mut cur = image;
-    if kernel.len() == 1 || cur.is_empty() {
-        return cur;
-    }
-    let mut tmp = vec![0.0f64; cur.len()];
     // Slowest axis first, as scipy does for a C-ordered array.
-    for axis in [2usize, 1, 0] {
-        let extent = [nx, ny, nz][axis];
-        if extent > 1 {
-            blur_axis(&cur, &mut tmp, [nx, ny, nz], axis, &kernel);
-            std::mem::swap(&mut cur, &mut tmp);
-        }
+    let axes: Vec<usize> = [2usize, 1, 0]
+        .into_iter()
+        .filter(|&a| dims[a] > 1)
+        .collect();
+    let (Some((&first, rest)), false) = (axes.split_first(), kernel.len() == 1) else {
+        return image.to_vec();
+    };
+    let mut out = vec![S::narrow(0.0); image.len()];
+    let Some((&last, between)) = rest.split_last() else {
+        blur_axis(image, &mut out, dims, first, &kernel);
+        return out;
+    };
+    let mut cur = vec![0.0f64; image.len()];
+    blur_axis(image, &mut cur, dims, first, &kernel);
+    if let Some(&middle) = between.first() {
+        let mut next = vec![0.0f64; image.len()];
+        blur_axis(&cur, &mut next, dims, middle, &kernel);
+        cur = next;
     }
-    cur
+    blur_axis(&cur, &mut out, dims, last, &kernel);
+    out
 }
 
 /// Sum in the order of numpy's pairwise summation (`np.sum` of a
@@ -113,45 +144,59 @@ pub const PARALLEL_FROM: usize = 1 << 18;
 
 /// One 1D pass along `axis` (0 = x, 1 = y, 2 = z); parallel over x-rows
 /// from [`PARALLEL_FROM`] samples. The kernel is symmetric; samples are
-/// combined in SciPy's order (`w₀·c + Σ_{d=r..1} w_d·(left_d + right_d)`).
-fn blur_axis(src: &[f64], dst: &mut [f64], dims: [usize; 3], axis: usize, kernel: &[f64]) {
+/// combined in SciPy's order (`w₀·c + Σ_{d=r..1} w_d·(left_d + right_d)`),
+/// row by row in an `f64` scratch row.
+fn blur_axis<S: Sample, D: Sample>(
+    src: &[S],
+    dst: &mut [D],
+    dims: [usize; 3],
+    axis: usize,
+    kernel: &[f64],
+) {
     let [nx, ny, nz] = dims;
     let r = kernel.len() / 2;
     let w0 = kernel[r];
     let (extent, stride_rows) = if axis == 1 { (ny, 1) } else { (nz, ny) };
     let last = extent as isize - 1;
-    let pass = |padded: &mut Vec<f64>, (row, out): (usize, &mut [f64])| {
+    let pass = |(padded, sums): &mut (Vec<f64>, Vec<f64>), (row, out): (usize, &mut [D])| {
+        sums.resize(nx, 0.0);
         if axis == 0 {
-            return blur_row(&src[row * nx..(row + 1) * nx], out, kernel, padded);
-        }
-        let (c, base) = if axis == 1 {
-            (row % ny, row - row % ny)
+            blur_row(&src[row * nx..(row + 1) * nx], sums, kernel, padded);
         } else {
-            (row / ny, row % ny)
-        };
-        let line = |cc: isize| {
-            let srow = base + cc.clamp(0, last) as usize * stride_rows;
-            &src[srow * nx..(srow + 1) * nx]
-        };
-        let c = c as isize;
-        out.iter_mut().zip(line(c)).for_each(|(o, &v)| *o = v * w0);
-        for d in (1..=r).rev() {
-            let (lo, hi) = (line(c - d as isize), line(c + d as isize));
-            let w = kernel[r - d];
-            for ((o, &a), &b) in out.iter_mut().zip(lo).zip(hi) {
-                *o += (a + b) * w;
+            let (c, base) = if axis == 1 {
+                (row % ny, row - row % ny)
+            } else {
+                (row / ny, row % ny)
+            };
+            let line = |cc: isize| {
+                let srow = base + cc.clamp(0, last) as usize * stride_rows;
+                &src[srow * nx..(srow + 1) * nx]
+            };
+            let c = c as isize;
+            sums.iter_mut()
+                .zip(line(c))
+                .for_each(|(o, &v)| *o = v.wide() * w0);
+            for d in (1..=r).rev() {
+                let (lo, hi) = (line(c - d as isize), line(c + d as isize));
+                let w = kernel[r - d];
+                for ((o, &a), &b) in sums.iter_mut().zip(lo).zip(hi) {
+                    *o += (a.wide() + b.wide()) * w;
+                }
             }
         }
+        out.iter_mut()
+            .zip(sums.iter())
+            .for_each(|(o, &v)| *o = D::narrow(v));
     };
     if dst.len() < PARALLEL_FROM {
-        let mut padded = Vec::new();
+        let mut scratch = Default::default();
         dst.chunks_mut(nx)
             .enumerate()
-            .for_each(|entry| pass(&mut padded, entry));
+            .for_each(|entry| pass(&mut scratch, entry));
     } else {
         dst.par_chunks_mut(nx)
             .enumerate()
-            .for_each_init(Vec::new, pass);
+            .for_each_init(Default::default, pass);
     }
 }
 
@@ -160,15 +205,17 @@ fn blur_axis(src: &[f64], dst: &mut [f64], dims: [usize; 3], axis: usize, kernel
 /// at once, in the order of the other axes' passes (`w₀·c`, then the taps
 /// from the outermost in), so the sums are those of a per-sample loop, bit
 /// for bit, in a loop the compiler vectorises.
-fn blur_row(row: &[f64], out: &mut [f64], kernel: &[f64], padded: &mut Vec<f64>) {
+fn blur_row<S: Sample>(row: &[S], out: &mut [f64], kernel: &[f64], padded: &mut Vec<f64>) {
     let r = kernel.len() / 2;
     let n = row.len();
     padded.clear();
-    padded.extend(std::iter::repeat_n(row[0], r));
-    padded.extend_from_slice(row);
-    padded.extend(std::iter::repeat_n(row[n - 1], r));
+    padded.extend(std::iter::repeat_n(row[0].wide(), r));
+    padded.extend(row.iter().map(|v| v.wide()));
+    padded.extend(std::iter::repeat_n(row[n - 1].wide(), r));
     let w0 = kernel[r];
-    out.iter_mut().zip(row).for_each(|(o, &v)| *o = v * w0);
+    out.iter_mut()
+        .zip(&padded[r..r + n])
+        .for_each(|(o, &v)| *o = v * w0);
     for d in (1..=r).rev() {
         let w = kernel[r - d];
         let (lo, hi) = (&padded[r - d..r - d + n], &padded[r + d..r + d + n]);
@@ -207,6 +254,30 @@ mod tests {
 
     /// The padded, tap-by-tap pass along x gives the per-sample clamped sum
     /// bit for bit, on rows shorter and longer than the kernel.
+    #[test]
+    fn an_f32_image_is_blurred_as_its_f64_copy_to_the_bit() {
+        for (dims, sigma) in [
+            ([9, 1, 1], 1.0),
+            ([13, 7, 1], 0.8),
+            ([6, 5, 4], 1.5),
+            ([1, 1, 8], 2.0),
+        ] {
+            let n = dims.iter().product::<usize>();
+            let image: Vec<f32> = (0..n).map(|i| ((i * 7919) % 101) as f32 / 17.0).collect();
+            let wide: Vec<f64> = image.iter().map(|&v| v as f64).collect();
+            let [nx, ny, nz] = dims;
+            let expected: Vec<u32> = gaussian_blur_3d_f64(&wide, nx, ny, nz, sigma)
+                .into_iter()
+                .map(|v| (v as f32).to_bits())
+                .collect();
+            let got: Vec<u32> = gaussian_blur_3d(&image, nx, ny, nz, sigma)
+                .into_iter()
+                .map(f32::to_bits)
+                .collect();
+            assert_eq!(got, expected, "{dims:?}");
+        }
+    }
+
     #[test]
     fn the_row_pass_is_the_clamped_sum_bit_for_bit() {
         let kernel = gaussian_kernel(1.3);

@@ -18,7 +18,6 @@
 //! six-disk phantom at σ 0.25, whose darkest disks sit 0.1 above a large
 //! background), the absorbed ones at most 0.16.
 
-
 /// Smallest share of the voxels that look like a phase it must hold.
 pub const ABSORBED_SHARE: f64 = 0.25;
 
@@ -103,7 +102,11 @@ mod tests {
     /// phase as its rank by increasing mean.
     fn absorbed_phases(image: &ImageView<'_>, ranks: &[u8], means: &[f64]) -> Vec<Absorbed> {
         let smoothed = CheckImage::default();
-        absorbed_by_count(smoothed.of(image), &pixels_by_rank(ranks, means.len()), means)
+        absorbed_by_count(
+            smoothed.of(image),
+            &pixels_by_rank(ranks, means.len()),
+            means,
+        )
     }
 
     #[test]

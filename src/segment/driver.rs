@@ -1,9 +1,9 @@
 //! The iteration driver: integrate, flip, compute forces, deform, check convergence.
 
 use super::absorbed::{absorbed_by_count, pixels_by_rank};
-use super::check_image::CheckImage;
 use super::adaptive::{AdaptiveSizing, Sizes};
 use super::band_phase::{band_phases, range_counts, VoxelSize};
+use super::check_image::CheckImage;
 use super::coarse_pass::{self, CoarsePassSummary};
 use super::contrast::phase_contrast;
 use super::error::SegmentError;

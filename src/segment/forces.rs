@@ -514,7 +514,9 @@ impl<K: Raster> ForceField<K> {
             .resize(self.acc.len(), [K::Point::zero(); MAXP]);
         for f in &self.facets {
             for p in 0..nf {
-                let Some(sums) = self.slot_sums.get_mut(self.acc_of[f.corners[p].index()] as usize)
+                let Some(sums) = self
+                    .slot_sums
+                    .get_mut(self.acc_of[f.corners[p].index()] as usize)
                 else {
                     continue;
                 };

@@ -440,10 +440,7 @@ mod tests {
         let faint: Vec<f32> = data.iter().map(|&v| 0.2 + (v - 0.2) / 10.0).collect();
         let view = ImageView::new_2d(64, 64, &faint).unwrap();
         let means = [Some(0.2), Some(0.26)];
-        assert_eq!(
-            missed(&view, &labels, &means, white(0.003)).len(),
-            1
-        );
+        assert_eq!(missed(&view, &labels, &means, white(0.003)).len(), 1);
         let correlated = Noise {
             sigma: 0.003,
             correlation: Some(0.9),
