@@ -410,32 +410,61 @@ fn curvature_tables(plateaus: &[Option<Plateau>], limits: &Limits) -> Vec<Option
 }
 
 /// The mean of each pixel's 3×3(×3) window (the part inside the grid),
-/// one axis at a time.
+/// one axis at a time. The sums are made in place (8 bytes a pixel, a
+/// volume of 256³ voxels among them) and the window's size is counted, not
+/// stored: the product over the axes of the pixel and its neighbours
+/// inside the grid.
 fn box_mean(values: &[f32], dims: [usize; 3]) -> Vec<f32> {
     let mut sum: Vec<f64> = values.iter().map(|&v| f64::from(v)).collect();
-    let mut count = vec![1.0f64; values.len()];
     let strides = [1, dims[0], dims[0] * dims[1]];
     for (axis, &stride) in strides.iter().enumerate() {
-        if dims[axis] < 2 {
-            continue;
-        }
-        for field in [&mut sum, &mut count] {
-            let before = field.clone();
-            for (i, v) in field.iter_mut().enumerate() {
-                let at = (i / stride) % dims[axis];
-                if at > 0 {
-                    *v += before[i - stride];
-                }
-                if at + 1 < dims[axis] {
-                    *v += before[i + stride];
-                }
-            }
+        if dims[axis] > 1 {
+            add_neighbours(&mut sum, stride, dims[axis]);
         }
     }
     sum.iter()
-        .zip(&count)
-        .map(|(s, c)| (s / c) as f32)
+        .enumerate()
+        .map(|(i, s)| (s / window_size(i, dims)) as f32)
         .collect()
+}
+
+/// Adds to each entry of `field` its two neighbours `stride` entries before
+/// and after it along an axis of `extent` entries (those inside the grid),
+/// as they were before this pass, in that order. The lines along the axis
+/// are `stride` entries apart; the one before is kept in a copy, the one
+/// after is not yet changed.
+fn add_neighbours(field: &mut [f64], stride: usize, extent: usize) {
+    let mut previous = vec![0.0; stride];
+    let mut current = vec![0.0; stride];
+    for block in field.chunks_mut(stride * extent) {
+        for k in 0..extent {
+            let (line, after) = block[k * stride..].split_at_mut(stride);
+            current.copy_from_slice(line);
+            for (j, v) in line.iter_mut().enumerate() {
+                if k > 0 {
+                    *v += previous[j];
+                }
+                if k + 1 < extent {
+                    *v += after[j];
+                }
+            }
+            std::mem::swap(&mut previous, &mut current);
+        }
+    }
+}
+
+/// How many pixels of the grid `dims` the 3×3(×3) window around pixel `i`
+/// holds.
+fn window_size(i: usize, dims: [usize; 3]) -> f64 {
+    let at = [
+        i % dims[0],
+        (i / dims[0]) % dims[1],
+        i / (dims[0] * dims[1]),
+    ];
+    (0..3)
+        .filter(|&a| dims[a] > 1)
+        .map(|a| 1 + usize::from(at[a] > 0) + usize::from(at[a] + 1 < dims[a]))
+        .product::<usize>() as f64
 }
 
 /// Every pixel counted for its label (no partial-volume model applies).
@@ -821,6 +850,57 @@ mod tests {
         let pv = partial_volume(&labels, &quantised, dims, 2);
         assert_eq!(pv, with_limits(&labels, &quantised, dims, 2, Limits::NONE));
         assert_eq!(pv.latent, pv.plateau);
+    }
+
+    /// The window means with every pass's sums and counts in arrays of
+    /// their own (what [`box_mean`] computes in place).
+    fn box_mean_by_copies(values: &[f32], dims: [usize; 3]) -> Vec<f32> {
+        let mut sum: Vec<f64> = values.iter().map(|&v| f64::from(v)).collect();
+        let mut count = vec![1.0f64; values.len()];
+        let strides = [1, dims[0], dims[0] * dims[1]];
+        for (axis, &stride) in strides.iter().enumerate() {
+            if dims[axis] < 2 {
+                continue;
+            }
+            for field in [&mut sum, &mut count] {
+                let before = field.clone();
+                for (i, v) in field.iter_mut().enumerate() {
+                    let at = (i / stride) % dims[axis];
+                    if at > 0 {
+                        *v += before[i - stride];
+                    }
+                    if at + 1 < dims[axis] {
+                        *v += before[i + stride];
+                    }
+                }
+            }
+        }
+        sum.iter()
+            .zip(&count)
+            .map(|(s, c)| (s / c) as f32)
+            .collect()
+    }
+
+    #[test]
+    fn box_mean_in_place_is_the_mean_by_copies_to_the_bit() {
+        for dims in [
+            [1, 1, 1],
+            [5, 1, 1],
+            [1, 6, 1],
+            [4, 3, 1],
+            [4, 3, 2],
+            [1, 1, 5],
+            [7, 2, 5],
+        ] {
+            let n = dims.iter().product::<usize>();
+            let values: Vec<f32> = (0..n).map(|i| ((i * 7919) % 113) as f32 / 9.0).collect();
+            let bits = |v: Vec<f32>| v.into_iter().map(f32::to_bits).collect::<Vec<_>>();
+            assert_eq!(
+                bits(box_mean(&values, dims)),
+                bits(box_mean_by_copies(&values, dims)),
+                "{dims:?}"
+            );
+        }
     }
 
     #[test]
