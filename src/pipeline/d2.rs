@@ -4,8 +4,9 @@
 
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
-    add_frame_and_phases, check_phantom, labels_of_samples, mean_dice, run_with_progress,
-    warn_missed_objects, GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
+    add_frame_and_phases, check_phantom, clamp_input, labels_of_samples, mean_dice,
+    run_with_progress, warn_missed_objects, GroundTruth, Job, JobTimes, Provenance, RunReport,
+    Source,
 };
 use crate::dim::D2;
 use crate::error::{Error, Result};
@@ -415,14 +416,20 @@ pub(crate) fn segment_image_then<T>(
     ready: impl FnOnce() -> Result<T>,
 ) -> Result<(Segmented, T)> {
     let (w, h) = image.dims();
-    let view = ImageView::new_2d(w, h, image.data())
-        .ok_or_else(|| Error::Usage("image buffer does not match its size".into()))?;
     let t_seg = Instant::now();
     // A file or an array has values of its own; a phantom has only [0, 1].
     let intensity = match &provenance.source {
         Source::File(_) | Source::Array => Some(IntensityMap::of_sample_type(image.sample_type())),
         Source::Phantom { .. } => None,
     };
+    let file_value = |v: f32| match intensity {
+        Some(map) => map.original_sample(f64::from(v), image.sample_type()),
+        None => f64::from(v),
+    };
+    let clamped = clamp_input(image.data(), file_value, "pixels");
+    let data = clamped.as_ref().map_or(image.data(), |(c, _)| c.as_slice());
+    let view = ImageView::new_2d(w, h, data)
+        .ok_or_else(|| Error::Usage("image buffer does not match its size".into()))?;
     let file_values = |e| with_file_values(e, intensity, image.sample_type());
     let mut params = params;
     let phase_choice = match params.auto_phases {
@@ -450,6 +457,9 @@ pub(crate) fn segment_image_then<T>(
     if let Source::File(path) = &provenance.source {
         let alpha = image.transparency().warning(path, w * h);
         report.warnings.splice(0..0, alpha);
+    }
+    if let Some((_, warning)) = &clamped {
+        report.warnings.insert(0, warning.clone());
     }
     report
         .warnings

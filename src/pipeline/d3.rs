@@ -5,8 +5,9 @@
 
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
-    add_frame_and_phases, check_phantom, labels_of_samples, mean_dice, run_with_progress,
-    warn_missed_objects, GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
+    add_frame_and_phases, check_phantom, clamp_input, labels_of_samples, mean_dice,
+    run_with_progress, warn_missed_objects, GroundTruth, Job, JobTimes, Provenance, RunReport,
+    Source,
 };
 use crate::dim::D3;
 use crate::error::{Error, Result};
@@ -303,7 +304,16 @@ pub(crate) fn segment_volume_then<T>(
 ) -> Result<(Segmented, T)> {
     let dims = volume.dims();
     let frame = volume.frame();
-    let view = ImageView::new_3d(dims, volume.data())
+    let t_seg = Instant::now();
+    let file_value = |v: f32| match volume.intensity() {
+        Some(map) => map.original_sample(f64::from(v), volume.sample_type()),
+        None => f64::from(v),
+    };
+    let clamped = clamp_input(volume.data(), file_value, "voxels");
+    let data = clamped
+        .as_ref()
+        .map_or(volume.data(), |(c, _)| c.as_slice());
+    let view = ImageView::new_3d(dims, data)
         .ok_or_else(|| Error::Usage("volume buffer does not match its size".into()))?
         .with_spacing(frame.domain_scale)
         .ok_or_else(|| {
@@ -312,7 +322,6 @@ pub(crate) fn segment_volume_then<T>(
                 frame.spacing
             ))
         })?;
-    let t_seg = Instant::now();
     let mut seg = match init_surface {
         None => Segmentation::<D3>::new(view, params.clone())
             .map_err(|e| with_file_values(e, volume.intensity(), volume.sample_type()))?,
@@ -320,6 +329,9 @@ pub(crate) fn segment_volume_then<T>(
     };
     let ready = ready()?;
     let mut report = run_with_progress(&mut seg, params.max_iterations, quiet)?;
+    if let Some((_, warning)) = &clamped {
+        report.warnings.insert(0, warning.clone());
+    }
     let segment_seconds = t_seg.elapsed().as_secs_f64();
 
     let labels = seg.label_image();

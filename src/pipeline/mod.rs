@@ -30,6 +30,7 @@ use crate::error::{Error, Result};
 use crate::io::Frame;
 use crate::segment::measurements::Measurements;
 use crate::segment::missed_objects::{missed_objects, Noise};
+use crate::segment::outliers::{clamp_outliers, Outliers};
 use crate::segment::params::MAX_PHASES;
 use crate::segment::ImageView;
 use crate::segment::{Raster, SegmentParams, SegmentReport, Segmentation};
@@ -301,6 +302,62 @@ pub(crate) fn warn_missed_objects<K: Raster>(
         .warnings
         .extend(found.iter().map(|m| m.warning(three_d)));
     report.missed_objects = Some(found);
+}
+
+/// The input's samples `data` with their outliers clamped
+/// ([`clamp_outliers`]) and the warning that says so, its values in the
+/// file's units (`file_value`); `None` where no sample lies far outside the
+/// rest. `samples` names them ("pixels" or "voxels").
+pub(crate) fn clamp_input(
+    data: &[f32],
+    file_value: impl Fn(f32) -> f64,
+    samples: &str,
+) -> Option<(Vec<f32>, String)> {
+    let (clamped, outliers) = clamp_outliers(data)?;
+    Some((clamped, outlier_warning(&outliers, file_value, samples)))
+}
+
+/// The warning of [`clamp_input`].
+fn outlier_warning(o: &Outliers, file_value: impl Fn(f32) -> f64, samples: &str) -> String {
+    let (below, above) = (o.extremes.0 < o.clamp.0, o.extremes.1 > o.clamp.1);
+    let v = |x: f32| file_value(x);
+    let (where_, kind, taken) = match (below, above) {
+        (true, true) => (
+            format!(
+                "outside the rest of the image ({} to {})",
+                v(o.extremes.0),
+                v(o.extremes.1)
+            ),
+            "dead or hot pixels, or other outliers",
+            format!("{} or {}", v(o.clamp.0), v(o.clamp.1)),
+        ),
+        (true, false) => (
+            format!(
+                "far below the rest of the image (down to {})",
+                v(o.extremes.0)
+            ),
+            "dead pixels or other outliers",
+            format!("{}", v(o.clamp.0)),
+        ),
+        _ => (
+            format!(
+                "far above the rest of the image (up to {})",
+                v(o.extremes.1)
+            ),
+            "hot pixels, cosmic rays or other outliers",
+            format!("{}", v(o.clamp.1)),
+        ),
+    };
+    let (samples, lie) = if o.count == 1 {
+        (samples.trim_end_matches('s'), "lies")
+    } else {
+        (samples, "lie")
+    };
+    format!(
+        "{} {samples} {lie} {where_}: {kind}; the segmentation counts them as {taken}, \
+         so that they cannot pull a phase's mean",
+        o.count
+    )
 }
 
 /// Checks the name, side and noise of a phantom `source` (2D, or 3D with

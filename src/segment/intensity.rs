@@ -58,11 +58,7 @@ impl IntensityStats {
     /// The figures of `image` (finite samples, at least one).
     pub fn of(image: &ImageView<'_>) -> Self {
         let (min, max) = image.range().unwrap_or((0.0, 0.0));
-        let [mut low, mut high] = strided_quantiles(image.data, [ROBUST_TAIL, 1.0 - ROBUST_TAIL]);
-        if high <= low {
-            // Most samples share one value: fall back on the extremes.
-            (low, high) = (min, max);
-        }
+        let (low, high) = robust_range(image.data, (min, max));
         let (noise, pairs) = noise_sigma(image, (min as f32, max as f32));
         IntensityStats {
             min,
@@ -116,6 +112,18 @@ impl IntensityStats {
 /// (a library function on CPUs without SSE4.1).
 fn bin_index(x: f64, bins: usize) -> usize {
     (x as usize).min(bins - 1)
+}
+
+/// The robust range of `data`, whose extremes are `range`: its
+/// [`ROBUST_TAIL`] and `1 −` [`ROBUST_TAIL`] quantiles, or the extremes
+/// where most samples share one value.
+pub fn robust_range(data: &[f32], range: (f64, f64)) -> (f64, f64) {
+    let [low, high] = strided_quantiles(data, [ROBUST_TAIL, 1.0 - ROBUST_TAIL]);
+    if high <= low {
+        range
+    } else {
+        (low, high)
+    }
 }
 
 /// The quantiles `q` of every k-th sample of `data`, so that at most

@@ -43,6 +43,12 @@ pub const MIN_SIGNIFICANCE: f64 = 8.0;
 /// and such clusters of noise grow large enough to pass the significance.
 pub const MIN_GAP: f64 = 6.0;
 
+/// Fewest samples a region holds to count: one or two samples that look
+/// like another phase are a hot or dead pixel (clamped as an outlier, it
+/// still looks brighter than its phase) or a speck of noise, which no mesh
+/// keeps and no option brings back.
+pub const MIN_SAMPLES: usize = 3;
+
 /// The largest neighbour correlation the noise is taken to have (a
 /// correlation of 1 would make every region's samples one).
 pub const MAX_CORRELATION: f64 = 0.95;
@@ -82,23 +88,35 @@ impl MissedObjects {
             let [x, y, z] = self.largest_at;
             (
                 "voxels",
-                format!("({x:.0}, {y:.0}, {z:.0})"),
+                format!("x = {x:.0}, y = {y:.0}, z = {z:.0}"),
                 "--min-edge-length",
             )
         } else {
             let [x, y, _] = self.largest_at;
-            ("pixels", format!("({x:.0}, {y:.0})"), "--edge-length")
+            ("pixels", format!("x = {x:.0}, y = {y:.0}"), "--edge-length")
         };
-        let (objects, look, are) = if self.count == 1 {
-            ("object", "looks", "is")
+        let (what, them) = if self.count == 1 {
+            (
+                format!(
+                    "1 object that looks like phase {} ({} {samples} centred at {at}) is",
+                    self.phase, self.pixels
+                ),
+                "it",
+            )
         } else {
-            ("objects", "look", "are")
+            (
+                format!(
+                    "{} objects that look like phase {} ({} {samples} in all, the largest {} \
+                     centred at {at}) are",
+                    self.count, self.phase, self.pixels, self.largest
+                ),
+                "them",
+            )
         };
         format!(
-            "{} {objects} that {look} like phase {} ({} {samples} in all, the largest {} at \
-             {at}) {are} labelled phase {}, which surrounds them: smaller or narrower than the \
-             length weight and the mesh keep (a lower --length-weight or {finer} may keep them)",
-            self.count, self.phase, self.pixels, self.largest, self.within
+            "{what} labelled phase {}, which surrounds {them}: smaller or narrower than the \
+             length weight and the mesh keep (a lower --length-weight or {finer} may keep {them})",
+            self.within
         )
     }
 }
@@ -154,6 +172,9 @@ pub fn missed_objects(
             continue;
         };
         if (mc - mj).abs() < MIN_GAP * smoothed_sigma {
+            continue;
+        }
+        if region.count < MIN_SAMPLES {
             continue;
         }
         let n = region.count as f64;

@@ -71,6 +71,7 @@ pub mod model;
 pub mod models;
 pub mod noise_correlation;
 mod normal_motion;
+pub mod outliers;
 pub mod params;
 pub mod partial_volume;
 pub mod phase_distance;

@@ -321,3 +321,47 @@ fn a_16_bit_volume_reports_means_in_its_own_units() {
     let saturation = &report["phases"]["saturation"];
     assert!(saturation["low"].is_null() && saturation["high"].is_null());
 }
+
+/// A 16-bit image whose phases use a thousandth of the range: a handful of
+/// hot pixels at 65535 would pull the brightest phase's mean past the next
+/// one's (the data term is a sum of squares); clamped, they change no label
+/// but their own, and the run says so.
+#[test]
+fn a_few_hot_pixels_do_not_move_the_phases() {
+    use dsc_seg::pipeline::{segment_image, Provenance};
+    let (size, n) = (256, 4);
+    let ph = Phantom2Kind::FourPhase.generate(size, 0.1, 2);
+    // about 60 of 65535 levels for the whole image
+    let dim: Vec<u16> = ph.image_u8().iter().map(|&b| 1000 + b as u16 / 4).collect();
+    let mut hot = dim.clone();
+    for i in [
+        size * 20 + 30,
+        size * 100 + 100,
+        size * 150 + 40,
+        size * 60 + 170,
+        7,
+    ] {
+        hot[i] = u16::MAX;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let run = |data: &[u16], name: &str| {
+        let path = dir.path().join(name);
+        save_u16(&path, size, data);
+        let image = Image2::load(&path).unwrap();
+        segment_image(&image, SegmentParams::new(n), Provenance::array(), true).unwrap()
+    };
+    let (clean, with_hot) = (run(&dim, "dim.png"), run(&hot, "hot.png"));
+    assert!(mean_dice(&clean.labels, &ph.truth, n) > 0.95);
+    let agreement = mean_dice(&with_hot.labels, &clean.labels, n);
+    assert!(agreement > 0.99, "hot pixels moved the phases: {agreement}");
+    let warning = with_hot.summary.warnings.first().expect("a warning");
+    assert!(
+        warning.starts_with("5 pixels lie far above the rest of the image (up to 65535)"),
+        "{warning}"
+    );
+    assert!(!clean
+        .summary
+        .warnings
+        .iter()
+        .any(|w| w.contains("far above")));
+}
