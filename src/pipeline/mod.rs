@@ -348,14 +348,14 @@ fn outlier_warning(o: &Outliers, file_value: impl Fn(f32) -> f64, samples: &str)
             format!("{}", v(o.clamp.1)),
         ),
     };
-    let (samples, lie) = if o.count == 1 {
-        (samples.trim_end_matches('s'), "lies")
+    let (samples, lie, them, they) = if o.count == 1 {
+        (samples.trim_end_matches('s'), "lies", "it", "it")
     } else {
-        (samples, "lie")
+        (samples, "lie", "them", "they")
     };
     format!(
-        "{} {samples} {lie} {where_}: {kind}; the segmentation counts them as {taken}, \
-         so that they cannot pull a phase's mean",
+        "{} {samples} {lie} {where_}: {kind}; the segmentation counts {them} as {taken}, \
+         so that {they} cannot pull a phase's mean",
         o.count
     )
 }

@@ -18,7 +18,7 @@ pub const ROBUST_TAIL: f64 = 0.001;
 
 /// Largest number of samples the quantiles and the noise estimate read (an
 /// evenly strided subset of larger inputs).
-const MAX_SAMPLES: usize = 1 << 20;
+pub const MAX_SAMPLES: usize = 1 << 20;
 
 /// Number of histogram bins between the robust range's ends.
 pub const HISTOGRAM_BINS: usize = 256;
@@ -58,7 +58,7 @@ impl IntensityStats {
     /// The figures of `image` (finite samples, at least one).
     pub fn of(image: &ImageView<'_>) -> Self {
         let (min, max) = image.range().unwrap_or((0.0, 0.0));
-        let (low, high) = robust_range(image.data, (min, max));
+        let (low, high) = robust_range(image.data, (min, max), MAX_SAMPLES);
         let (noise, pairs) = noise_sigma(image, (min as f32, max as f32));
         IntensityStats {
             min,
@@ -115,10 +115,11 @@ fn bin_index(x: f64, bins: usize) -> usize {
 }
 
 /// The robust range of `data`, whose extremes are `range`: its
-/// [`ROBUST_TAIL`] and `1 −` [`ROBUST_TAIL`] quantiles, or the extremes
-/// where most samples share one value.
-pub fn robust_range(data: &[f32], range: (f64, f64)) -> (f64, f64) {
-    let [low, high] = strided_quantiles(data, [ROBUST_TAIL, 1.0 - ROBUST_TAIL]);
+/// [`ROBUST_TAIL`] and `1 −` [`ROBUST_TAIL`] quantiles among at most
+/// `max_samples` evenly strided samples, or the extremes where most samples
+/// share one value.
+pub fn robust_range(data: &[f32], range: (f64, f64), max_samples: usize) -> (f64, f64) {
+    let [low, high] = strided_quantiles(data, [ROBUST_TAIL, 1.0 - ROBUST_TAIL], max_samples);
     if high <= low {
         range
     } else {
@@ -127,9 +128,9 @@ pub fn robust_range(data: &[f32], range: (f64, f64)) -> (f64, f64) {
 }
 
 /// The quantiles `q` of every k-th sample of `data`, so that at most
-/// [`MAX_SAMPLES`] are read (see [`quantiles`]).
-fn strided_quantiles<const R: usize>(data: &[f32], q: [f64; R]) -> [f64; R] {
-    let stride = data.len().div_ceil(MAX_SAMPLES).max(1);
+/// `max_samples` are read (see [`quantiles`]).
+fn strided_quantiles<const R: usize>(data: &[f32], q: [f64; R], max_samples: usize) -> [f64; R] {
+    let stride = data.len().div_ceil(max_samples).max(1);
     if stride == 1 {
         quantiles(|| data.iter().copied(), q)
     } else {
@@ -432,7 +433,7 @@ mod tests {
             let mut sorted = data.clone();
             sorted.sort_by(f32::total_cmp);
             let expect = |q: f64| f64::from(sorted[rank(sorted.len(), q)]);
-            let [a, b] = strided_quantiles(&data, [q0, q1]);
+            let [a, b] = strided_quantiles(&data, [q0, q1], MAX_SAMPLES);
             prop_assert_eq!(a.to_bits(), expect(q0).to_bits());
             prop_assert_eq!(b.to_bits(), expect(q1).to_bits());
             let [c] = quantiles(|| data.iter().copied(), [q1]);
