@@ -29,6 +29,8 @@ pub enum FrameSource {
     PngPhys,
     /// TIFF `XResolution`/`YResolution` tags (and ImageJ's `spacing=` in 3D).
     TiffResolution,
+    /// An OME-TIFF's OME-XML description (`PhysicalSizeX`/`Y`/`Z`).
+    OmeXml,
     /// NIfTI sform.
     NiftiSform,
     /// NIfTI qform.

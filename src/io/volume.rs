@@ -41,7 +41,7 @@ use super::frame::{Affine, Frame, FrameSource};
 use super::hyperstack::Hyperstack;
 use super::image2::{lerp_nodes, Colour, Image2, SampleType};
 use super::intensity::IntensityMap;
-use super::resolution::{tiff_resolution, Resolution};
+use super::resolution::{tiff_sizes, Resolution};
 
 /// A 3D grayscale volume (x fastest, then y, then z) with intensities in
 /// `[0,1]` and a physical voxel spacing; see the module documentation.
@@ -62,6 +62,8 @@ pub struct Volume {
     source: FrameSource,
     /// The 348-byte header of a NIfTI input, the template of its label map.
     nifti_header: Option<Vec<u8>>,
+    /// Warnings of reading the voxel size (see [`Volume::size_warnings`]).
+    size_warnings: Vec<String>,
 }
 
 impl Volume {
@@ -89,6 +91,7 @@ impl Volume {
             affine: None,
             source: FrameSource::Default,
             nifti_header: None,
+            size_warnings: Vec::new(),
         }
     }
 
@@ -146,7 +149,16 @@ impl Volume {
         self.spacing = spacing;
         self.source = FrameSource::Given;
         self.unit = crate::io::frame::given_unit(&self.unit).to_string();
+        // The file's voxel size is not used: what was said of it is moot.
+        self.size_warnings.clear();
         self
+    }
+
+    /// What reading the file's voxel size left to say, one line each naming
+    /// the file: an OME-TIFF whose OME-XML could not be used, or that gives
+    /// no `PhysicalSizeZ` for its slices. Empty once [`Volume::respaced`].
+    pub fn size_warnings(&self) -> &[String] {
+        &self.size_warnings
     }
 
     /// The header of the NIfTI file this volume was read from.
@@ -217,7 +229,9 @@ impl Volume {
     /// Loads a multi-page grayscale TIFF (8/16/32-bit integer or 32/64-bit
     /// float samples, one page per z slice) as written by Fiji/ImageJ or
     /// tifffile. All pages must have the same size. The spacing is taken
-    /// from Fiji/ImageJ metadata when present (unit spacing otherwise).
+    /// from an OME-TIFF's OME-XML or the resolution tags and Fiji/ImageJ
+    /// metadata when present (unit spacing otherwise; see
+    /// [`tiff_sizes`]).
     pub fn load_tiff(path: impl AsRef<Path>) -> Result<Self> {
         use tiff::decoder::{Decoder, DecodingResult};
         let path = path.as_ref();
@@ -230,7 +244,7 @@ impl Volume {
             },
         };
         let mut dec = Decoder::new(BufReader::new(file)).map_err(bad)?;
-        let resolution = tiff_resolution(&mut dec);
+        let sizes = tiff_sizes(&mut dec, path);
         if let Some(stack) = Hyperstack::of_tiff(&mut dec) {
             return Err(IoError::NotOneVolume {
                 path: path.to_path_buf(),
@@ -323,6 +337,16 @@ impl Volume {
             path: path.to_path_buf(),
             samples,
         })?;
+        let resolution = sizes.resolution.as_ref();
+        let unit = resolution.map_or("px".into(), |r| r.unit.clone());
+        let mut size_warnings = sizes.warnings;
+        if nz > 1 && sizes.source == FrameSource::OmeXml && !sizes.z_given {
+            size_warnings.push(format!(
+                "{}: its OME-XML gives no PhysicalSizeZ: its slices are taken as 1 {unit} apart \
+                 (--spacing X,Y,Z gives the voxel size)",
+                path.display()
+            ));
+        }
         Ok(Volume {
             nx,
             ny,
@@ -330,15 +354,12 @@ impl Volume {
             data,
             intensity: Some(intensity),
             sample_type,
-            spacing: resolution.as_ref().map_or([1.0; 3], |r| r.spacing),
-            unit: resolution.as_ref().map_or("px".into(), |r| r.unit.clone()),
+            spacing: resolution.map_or([1.0; 3], |r| r.spacing),
+            unit,
             affine: None,
             nifti_header: None,
-            source: if resolution.is_some() {
-                FrameSource::TiffResolution
-            } else {
-                FrameSource::Default
-            },
+            source: sizes.source,
+            size_warnings,
         })
     }
 

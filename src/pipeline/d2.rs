@@ -11,7 +11,7 @@ use super::{
 use crate::dim::D2;
 use crate::error::{Error, Result};
 use crate::io::intensity::IntensityMap;
-use crate::io::resolution::{image_frame, is_tiff};
+use crate::io::resolution::{image_frame_and_warnings, is_tiff};
 use crate::io::{save_gray8_png, Colour, Frame, Image2, IoError, Overlay, Volume};
 use crate::phantom::{self, Phantom2Kind};
 use crate::segment::auto::{choose_phases, PhaseChoice};
@@ -454,9 +454,12 @@ pub(crate) fn segment_image_then<T>(
         let lost = std::mem::take(&mut report.lost_phase_warnings);
         report.warnings.retain(|w| !lost.contains(w));
     }
+    let (frame, size_warnings) = input_frame(image, &provenance.source);
     if let Source::File(path) = &provenance.source {
         let alpha = image.transparency().warning(path, w * h);
-        report.warnings.splice(0..0, alpha);
+        report
+            .warnings
+            .splice(0..0, alpha.into_iter().chain(size_warnings));
     }
     if let Some((_, warning)) = &clamped {
         report.warnings.insert(0, warning.clone());
@@ -500,18 +503,6 @@ pub(crate) fn segment_image_then<T>(
         phase_choice,
     };
     let mut report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
-    let frame = match (image.placement(), &provenance.source) {
-        (Some(placed), _) => placed.clone(),
-        (None, Source::File(path)) => image_frame(path, w, h),
-        (None, _) => Frame::image_rows_up(w, h, [1.0, 1.0], "px"),
-    };
-    let mut frame = match image.spacing() {
-        Some([sx, sy]) => frame.respaced([sx, sy, frame.spacing[2]]),
-        None => frame,
-    };
-    if let Some(unit) = image.unit() {
-        frame.unit = unit.to_string();
-    }
     let order = seg.phase_order();
     let measurements =
         Measurements::from_labels(&labels, image.data(), intensity, &frame, params.phases)
@@ -538,6 +529,27 @@ pub(crate) fn segment_image_then<T>(
         tiff_labels: matches!(&provenance.source, Source::File(path) if is_tiff(path)),
     };
     Ok((result, ready))
+}
+
+/// The frame of an image from `source`: a NIfTI slice's placement, else
+/// the file's pixel size (see [`image_frame_and_warnings`]), replaced by the
+/// image's own when it has one (`--spacing`); with the warnings of reading
+/// the file's pixel size when it is used.
+fn input_frame(image: &Image2, source: &Source) -> (Frame, Vec<String>) {
+    let (w, h) = image.dims();
+    let (frame, warnings) = match (image.placement(), source) {
+        (Some(placed), _) => (placed.clone(), Vec::new()),
+        (None, Source::File(path)) => image_frame_and_warnings(path, w, h),
+        (None, _) => (Frame::image_rows_up(w, h, [1.0, 1.0], "px"), Vec::new()),
+    };
+    let (mut frame, warnings) = match image.spacing() {
+        Some([sx, sy]) => (frame.respaced([sx, sy, frame.spacing[2]]), Vec::new()),
+        None => (frame, warnings),
+    };
+    if let Some(unit) = image.unit() {
+        frame.unit = unit.to_string();
+    }
+    (frame, warnings)
 }
 
 /// The header of a NIfTI slice's `labels.nii.gz`: the input's, its pixel

@@ -332,6 +332,11 @@ pub(crate) fn segment_volume_then<T>(
     if let Some((_, warning)) = &clamped {
         report.warnings.insert(0, warning.clone());
     }
+    // What reading the voxel size left to say comes first, as it concerns
+    // every length of the result.
+    report
+        .warnings
+        .splice(0..0, volume.size_warnings().iter().cloned());
     let segment_seconds = t_seg.elapsed().as_secs_f64();
 
     let labels = seg.label_image();
