@@ -16,6 +16,7 @@ mod intensity;
 mod measures;
 mod messages;
 mod missed;
+mod ome_tiff;
 mod physical;
 mod prop2d;
 mod report_units;
