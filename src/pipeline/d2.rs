@@ -446,6 +446,7 @@ pub(crate) fn segment_image_then<T>(
     let ready = ready()?;
 
     let mut report = run_with_progress(&mut seg, params.max_iterations, quiet)?;
+    let segment = t_seg.elapsed().as_secs_f64();
     if phase_choice
         .as_ref()
         .is_some_and(|c| c.floor_warning().is_some())
@@ -467,7 +468,6 @@ pub(crate) fn segment_image_then<T>(
     report
         .warnings
         .extend(phase_choice.iter().flat_map(PhaseChoice::warnings));
-    let segment = t_seg.elapsed().as_secs_f64();
 
     let labels = seg.label_image();
     warn_missed_objects(&seg, &view, &labels, &mut report);
