@@ -426,7 +426,7 @@ pub(crate) fn segment_image_then<T>(
         Some(map) => map.original_sample(f64::from(v), image.sample_type()),
         None => f64::from(v),
     };
-    let clamped = clamp_input(image.data(), file_value, "pixels");
+    let clamped = clamp_input(image.data(), [w, h, 1], file_value, "pixels");
     let data = clamped.as_ref().map_or(image.data(), |(c, _)| c.as_slice());
     let view = ImageView::new_2d(w, h, data)
         .ok_or_else(|| Error::Usage("image buffer does not match its size".into()))?;

@@ -309,7 +309,7 @@ pub(crate) fn segment_volume_then<T>(
         Some(map) => map.original_sample(f64::from(v), volume.sample_type()),
         None => f64::from(v),
     };
-    let clamped = clamp_input(volume.data(), file_value, "voxels");
+    let clamped = clamp_input(volume.data(), dims, file_value, "voxels");
     let data = clamped
         .as_ref()
         .map_or(volume.data(), |(c, _)| c.as_slice());

@@ -304,16 +304,17 @@ pub(crate) fn warn_missed_objects<K: Raster>(
     report.missed_objects = Some(found);
 }
 
-/// The input's samples `data` with their outliers clamped
+/// The input's samples `data` (on the grid `dims`) with their outliers clamped
 /// ([`clamp_outliers`]) and the warning that says so, its values in the
 /// file's units (`file_value`); `None` where no sample lies far outside the
 /// rest. `samples` names them ("pixels" or "voxels").
 pub(crate) fn clamp_input(
     data: &[f32],
+    dims: [usize; 3],
     file_value: impl Fn(f32) -> f64,
     samples: &str,
 ) -> Option<(Vec<f32>, String)> {
-    let (clamped, outliers) = clamp_outliers(data)?;
+    let (clamped, outliers) = clamp_outliers(data, dims)?;
     Some((clamped, outlier_warning(&outliers, file_value, samples)))
 }
 

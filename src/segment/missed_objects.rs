@@ -32,6 +32,7 @@
 use super::check_image::CHECK_SMOOTHING;
 use super::image::ImageView;
 use serde::Serialize;
+use std::collections::{HashMap, HashSet};
 
 /// How many standard errors of the noise a region's mean must lie from the
 /// enclosing phase's mean to count.
@@ -42,6 +43,12 @@ pub const MIN_SIGNIFICANCE: f64 = 8.0;
 /// of one crosses the midpoint with probability 0.13 %, at 3 with 6.7 %,
 /// and such clusters of noise grow large enough to pass the significance.
 pub const MIN_GAP: f64 = 6.0;
+
+/// The share of an object's samples (those that look like its phase) below
+/// which its label counts as shrunk: a spot of three pixels' radius labelled
+/// as a 3×3 square holds a third; the boundaries of kept objects, where the
+/// label and the smoothed image disagree by a pixel, hold far more.
+pub const SHRUNK_SHARE: f64 = 2.0 / 3.0;
 
 /// Fewest samples a region holds to count: one or two samples that look
 /// like another phase are a hot or dead pixel (clamped as an outlier, it
@@ -74,10 +81,15 @@ pub struct MissedObjects {
     pub count: usize,
     /// Their pixels or voxels in all.
     pub pixels: usize,
-    /// The largest one's.
+    /// The largest one's (its labelled core with it).
     pub largest: usize,
     /// The largest one's centre, in pixel or voxel indices (x, y, z).
     pub largest_at: [f64; 3],
+    /// Of their pixels or voxels, those labelled as the phase they look
+    /// like: 0 for objects left out, under [`SHRUNK_SHARE`] of
+    /// `pixels + labelled` for objects the labels kept smaller than they
+    /// look (a core of a few cells).
+    pub labelled: usize,
 }
 
 impl MissedObjects {
@@ -95,6 +107,9 @@ impl MissedObjects {
             let [x, y, _] = self.largest_at;
             ("pixels", format!("x = {x:.0}, y = {y:.0}"), "--edge-length")
         };
+        if self.labelled > 0 {
+            return self.shrunk_warning(samples, &at, finer);
+        }
         let (what, them) = if self.count == 1 {
             (
                 format!(
@@ -117,6 +132,29 @@ impl MissedObjects {
             "{what} labelled phase {}, which surrounds {them}: smaller or narrower than the \
              length weight and the mesh keep (a lower --length-weight or {finer} may keep {them})",
             self.within
+        )
+    }
+
+    /// The warning of objects the labels kept smaller than they look.
+    fn shrunk_warning(&self, samples: &str, at: &str, finer: &str) -> String {
+        let total = self.pixels + self.labelled;
+        let what = if self.count == 1 {
+            format!(
+                "1 object that looks like phase {} ({total} {samples} centred at {at}) is",
+                self.phase
+            )
+        } else {
+            format!(
+                "{} objects that look like phase {} ({total} {samples} in all, the largest {} \
+                 centred at {at}) are",
+                self.count, self.phase, self.largest
+            )
+        };
+        format!(
+            "{what} labelled smaller than they look: {} of the {total} {samples} carry phase \
+             {}, the rest phase {}, so their areas are underestimated (objects of a few cells; \
+             a lower --length-weight or {finer} may keep more of them)",
+            self.labelled, self.phase, self.within
         )
     }
 }
@@ -157,6 +195,8 @@ pub fn missed_objects(
     let mut found: Vec<MissedObjects> = Vec::new();
     let mut seen = vec![false; labels.len()];
     let mut stack = Vec::new();
+    let judge = Judge { sigma, independent };
+    let mut cores = Cores::default();
     for start in 0..labels.len() {
         // (a region holding its class's label is no object: only samples
         // labelled otherwise than they look start or join one)
@@ -174,19 +214,42 @@ pub fn missed_objects(
         if (mc - mj).abs() < MIN_GAP * smoothed_sigma {
             continue;
         }
-        if region.count < MIN_SAMPLES {
-            continue;
-        }
-        let n = region.count as f64;
-        let mean = region.sum / n;
-        let nearer_c = (mean - mc).abs() < (mean - mj).abs();
-        let significance = (mean - mj).abs() * (n * independent).sqrt() / sigma;
-        if nearer_c && significance >= MIN_SIGNIFICANCE {
-            record(&mut found, c, j, &region);
+        match region.own {
+            // (the rim of a core labelled `c`: judged with the core's other rims)
+            Some(at) => cores.add_rim(at, labels, image.dims, (c, j), region),
+            None => {
+                if looks_like_c(&region, (mc, mj), &judge) {
+                    record(&mut found, (c, j), &region, 0);
+                }
+            }
         }
     }
-    found.sort_by_key(|m| (m.phase, m.within));
+    for (core, rim) in cores.rims() {
+        let core = *core;
+        let (c, j) = rim.phases;
+        let (Some(mc), Some(mj)) = (means[c as usize], means[j as usize]) else {
+            continue;
+        };
+        let shrunk = (core as f64) < SHRUNK_SHARE * (core + rim.region.count) as f64;
+        if shrunk && looks_like_c(&rim.region, (mc, mj), &judge) {
+            record(&mut found, (c, j), &rim.region, core);
+        }
+    }
+    found.sort_by_key(|m| (m.phase, m.within, m.labelled > 0));
     found
+}
+
+/// Whether `region`, of at least [`MIN_SAMPLES`], has an unsmoothed mean
+/// nearer `mc` than `mj` and at least [`MIN_SIGNIFICANCE`] standard errors
+/// from `mj`.
+fn looks_like_c(region: &Region, (mc, mj): (f64, f64), noise: &Judge) -> bool {
+    if region.count < MIN_SAMPLES {
+        return false;
+    }
+    let n = region.count as f64;
+    let mean = region.sum / n;
+    let nearer_c = (mean - mc).abs() < (mean - mj).abs();
+    nearer_c && (mean - mj).abs() * (n * noise.independent).sqrt() / noise.sigma >= MIN_SIGNIFICANCE
 }
 
 /// The factor by which the smoothing lowers white noise's standard
@@ -211,13 +274,16 @@ struct Region {
     sum: f64,
     centre_sum: [f64; 3],
     enclosing: Option<u8>,
+    /// A neighbour of its class labelled with it: the region is the rim of
+    /// an object the labels kept, whole or smaller.
+    own: Option<usize>,
 }
 
 /// Grows the face-connected region of `start`'s class `c` among the samples
 /// not labelled `c` (and marks it seen). Its `enclosing` label `j` is the
-/// one its pixels and their neighbours outside it carry, or `None` if they
-/// carry several, if it is `c`, if the region touches a sample of its class
-/// labelled `c` (it is part of a region the labels kept), or if a
+/// one its pixels and their neighbours outside it carry (but for those
+/// labelled `c`, the core the labels kept, if any: `own`), or
+/// `None` if they carry several, if it is `c`, or if a
 /// neighbour's class lies outside the range from `c` to `j`
 /// (classes are in the order of their means): a lost object's neighbours
 /// look like `j` or like the blur between the two, while a region next to
@@ -234,7 +300,7 @@ fn grow(
     let c = class[start];
     let mut single: Option<u8> = None;
     let mut mixed = false;
-    let mut holds_own = false;
+    let mut own = None;
     let (mut lowest, mut highest) = (c, c);
     let mut note = |l: u8| match single {
         None => single = Some(l),
@@ -246,6 +312,7 @@ fn grow(
         sum: 0.0,
         centre_sum: [0.0; 3],
         enclosing: None,
+        own: None,
     };
     seen[start] = true;
     stack.push(start);
@@ -262,8 +329,8 @@ fn grow(
         }
         note(labels[i]);
         for n in face_neighbours(i, dims).into_iter().flatten() {
-            if class[n] == c && labels[n] == c {
-                holds_own = true;
+            if labels[n] == c {
+                own = own.or(Some(n));
             } else if class[n] == c {
                 if !seen[n] {
                     seen[n] = true;
@@ -277,8 +344,9 @@ fn grow(
         }
     }
     region.enclosing = single
-        .filter(|&j| !mixed && !holds_own && j != c)
+        .filter(|&j| !mixed && j != c)
         .filter(|&j| lowest >= c.min(j) && highest <= c.max(j));
+    region.own = own;
     region
 }
 
@@ -297,12 +365,128 @@ fn face_neighbours(i: usize, [nx, ny, nz]: [usize; 3]) -> [Option<usize>; 6] {
     ]
 }
 
-/// Adds `region`, an object of `phase` inside `within`, to `found`.
-fn record(found: &mut Vec<MissedObjects>, phase: u8, within: u8, region: &Region) {
+/// The noise a region's mean is judged against: its standard deviation
+/// and the share of a region's samples that count as independent.
+struct Judge {
+    sigma: f64,
+    independent: f64,
+}
+
+/// Largest core (samples labelled as the phase its rims look like) judged
+/// for a shrunk object: objects of a few cells; a larger core is a kept
+/// object's, and its boundary's disagreements with the smoothed image are
+/// not counted.
+pub const MAX_CORE: usize = 4096;
+
+/// The cores the labels kept that regions of their own class surround (the
+/// rims of objects the labels kept smaller than they look), each with its
+/// size and its rims gathered: a rim broken by the corners of a square
+/// core is one object's.
+#[derive(Default)]
+struct Cores {
+    /// Per sample of a core explored: the core's index, or `usize::MAX`
+    /// for a core larger than [`MAX_CORE`].
+    core_of: HashMap<usize, usize>,
+    /// Per core: its size, its rims together, and whether they agree on
+    /// the phases.
+    cores: Vec<(usize, Option<Rim>, bool)>,
+}
+
+/// The rims of one core, merged.
+struct Rim {
+    /// The phase they look like and the one that labels them.
+    phases: (u8, u8),
+    region: Region,
+}
+
+impl Cores {
+    /// Adds `region`, a rim of class `phases.0` inside `phases.1`, to the
+    /// core that holds sample `at`.
+    fn add_rim(
+        &mut self,
+        at: usize,
+        labels: &[u8],
+        dims: [usize; 3],
+        phases: (u8, u8),
+        region: Region,
+    ) {
+        let Some(k) = self.core(at, labels, dims) else {
+            return;
+        };
+        let (_, rim, agree) = &mut self.cores[k];
+        match rim {
+            None => *rim = Some(Rim { phases, region }),
+            Some(r) if r.phases == phases => {
+                r.region.count += region.count;
+                r.region.sum += region.sum;
+                for (a, b) in r.region.centre_sum.iter_mut().zip(region.centre_sum) {
+                    *a += b;
+                }
+            }
+            Some(_) => *agree = false,
+        }
+    }
+
+    /// The index of the core holding `at` (the face-connected samples
+    /// labelled as it is), explored now if it was not; `None` for a core
+    /// larger than [`MAX_CORE`].
+    fn core(&mut self, at: usize, labels: &[u8], dims: [usize; 3]) -> Option<usize> {
+        const LARGE: usize = usize::MAX;
+        if let Some(&k) = self.core_of.get(&at) {
+            return (k != LARGE).then_some(k);
+        }
+        let l = labels[at];
+        let (mut core, mut stack) = (vec![at], vec![at]);
+        let mut seen = HashSet::from([at]);
+        let mut large = false;
+        while let Some(i) = stack.pop() {
+            for n in face_neighbours(i, dims).into_iter().flatten() {
+                if labels[n] != l || !seen.insert(n) {
+                    continue;
+                }
+                if self.core_of.get(&n) == Some(&LARGE) || core.len() >= MAX_CORE {
+                    large = true;
+                    break;
+                }
+                core.push(n);
+                stack.push(n);
+            }
+            if large {
+                break;
+            }
+        }
+        let k = if large { LARGE } else { self.cores.len() };
+        if !large {
+            self.cores.push((core.len(), None, true));
+        }
+        for i in core {
+            self.core_of.insert(i, k);
+        }
+        (!large).then_some(k)
+    }
+
+    /// Each core with rims that agree on their phases: its size and rims.
+    fn rims(&self) -> impl Iterator<Item = (&usize, &Rim)> {
+        self.cores
+            .iter()
+            .filter(|(_, _, agree)| *agree)
+            .filter_map(|(size, rim, _)| rim.as_ref().map(|r| (size, r)))
+    }
+}
+
+/// Adds `region`, an object of `phase` inside `within` whose core the labels
+/// kept (`labelled` samples; 0: left out), to `found`.
+fn record(
+    found: &mut Vec<MissedObjects>,
+    (phase, within): (u8, u8),
+    region: &Region,
+    labelled: usize,
+) {
     let centre = region.centre_sum.map(|s| s / region.count as f64);
+    let shrunk = labelled > 0;
     let entry = match found
         .iter_mut()
-        .find(|m| m.phase == phase && m.within == within)
+        .find(|m| m.phase == phase && m.within == within && (m.labelled > 0) == shrunk)
     {
         Some(m) => m,
         None => {
@@ -313,14 +497,17 @@ fn record(found: &mut Vec<MissedObjects>, phase: u8, within: u8, region: &Region
                 pixels: 0,
                 largest: 0,
                 largest_at: centre,
+                labelled: 0,
             });
             found.last_mut().expect("just pushed")
         }
     };
     entry.count += 1;
     entry.pixels += region.count;
-    if region.count > entry.largest {
-        entry.largest = region.count;
+    entry.labelled += labelled;
+    let size = region.count + labelled;
+    if size > entry.largest {
+        entry.largest = size;
         entry.largest_at = centre;
     }
 }
@@ -379,15 +566,35 @@ mod tests {
     }
 
     #[test]
-    fn spots_labelled_as_themselves_are_not() {
+    fn spots_labelled_as_themselves_are_not_and_their_centres_alone_are_shrunk() {
         let (data, centres) = spots();
         let view = ImageView::new_2d(64, 64, &data).unwrap();
+        let means = [Some(0.2), Some(0.8)];
         let mut labels = vec![0u8; data.len()];
         for &(cx, cy) in &centres {
-            labels[cy * 64 + cx] = 1;
+            for y in cy - 1..=cy + 1 {
+                for x in cx - 1..=cx + 1 {
+                    labels[y * 64 + x] = 1;
+                }
+            }
         }
-        let found = missed(&view, &labels, &[Some(0.2), Some(0.8)], white(0.03));
+        let found = missed(&view, &labels, &means, white(0.03));
         assert!(found.is_empty(), "{found:?}");
+        // only each spot's centre labelled: kept, but smaller than it looks
+        let mut centres_only = vec![0u8; data.len()];
+        for &(cx, cy) in &centres {
+            centres_only[cy * 64 + cx] = 1;
+        }
+        let found = missed(&view, &centres_only, &means, white(0.03));
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert_eq!((found[0].phase, found[0].within), (1, 0));
+        assert_eq!((found[0].count, found[0].labelled), (4, 4));
+        let warning = found[0].warning(false);
+        assert!(
+            warning.starts_with("4 objects that look like phase 1")
+                && warning.contains("labelled smaller than they look: 4 of the"),
+            "{warning}"
+        );
     }
 
     #[test]

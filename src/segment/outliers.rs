@@ -11,17 +11,19 @@
 //! sample more than the robust range's width beyond the robust range (its
 //! [`ROBUST_TAIL`](super::intensity::ROBUST_TAIL) quantiles, so fewer than
 //! a thousandth of the samples) counts as if it lay at that distance: still
-//! far from every phase, so a small object that bright keeps a label of
-//! its own, but with the leverage of a sample at the range's edge. The run
-//! says how many were clamped.
+//! far from every phase, but with the leverage of a sample at the range's
+//! edge. Only isolated samples are outliers: a face-connected group of
+//! more than [`MAX_GROUP`] samples beyond the bound is a structure (a
+//! bright spot spread by the optics over a few pixels, a metal implant),
+//! rare but real, and is left as it is. The run says how many were
+//! clamped.
 
-use super::intensity::robust_range;
+use super::intensity::{robust_range, MAX_SAMPLES};
+use std::collections::HashSet;
 
-/// Samples the robust range is estimated from (evenly strided): its 0.1 %
-/// quantiles are then the 5th samples from each end, which the few hot
-/// pixels this is for do not reach (a strided sample holds one in 16 of a
-/// 256² image's), at a small part of the run's setup.
-const RANGE_SAMPLES: usize = 1 << 12;
+/// The largest face-connected group of samples beyond the bound that
+/// counts as outliers: a hot pixel, a pair, a short cosmic-ray track.
+pub const MAX_GROUP: usize = 4;
 
 /// The samples clamped, and where.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,10 +36,11 @@ pub struct Outliers {
     pub extremes: (f32, f32),
 }
 
-/// `data` with its outliers clamped, and what was clamped; `None` where no
-/// sample lies more than the robust range's width beyond it (the data are
-/// then used as they are).
-pub fn clamp_outliers(data: &[f32]) -> Option<(Vec<f32>, Outliers)> {
+/// `data`, samples on the grid `dims` (x fastest), with its outliers
+/// clamped, and what was clamped; `None` where no isolated sample lies more
+/// than the robust range's width beyond it (the data are then used as they
+/// are).
+pub fn clamp_outliers(data: &[f32], dims: [usize; 3]) -> Option<(Vec<f32>, Outliers)> {
     // (`f32::min` passes over a NaN; a NaN or an infinity is the
     // segmentation's to refuse, unclamped)
     let (min, max) = data
@@ -48,21 +51,74 @@ pub fn clamp_outliers(data: &[f32]) -> Option<(Vec<f32>, Outliers)> {
     if !(min.is_finite() && max.is_finite()) {
         return None;
     }
-    let (low, high) = robust_range(data, (f64::from(min), f64::from(max)), RANGE_SAMPLES);
+    let (low, high) = robust_range(data, (f64::from(min), f64::from(max)), MAX_SAMPLES);
     let span = high - low;
     let clamp = ((low - span) as f32, (high + span) as f32);
     let inside = min >= clamp.0 && max <= clamp.1;
     if span.is_nan() || span <= 0.0 || inside {
         return None;
     }
-    let count = data.iter().filter(|&&v| v < clamp.0 || v > clamp.1).count();
-    let clamped = data.iter().map(|&v| v.clamp(clamp.0, clamp.1)).collect();
+    let beyond = |v: f32| v < clamp.0 || v > clamp.1;
+    let isolated = isolated_groups(data, dims, beyond);
+    if isolated.is_empty() {
+        return None;
+    }
+    let mut clamped = data.to_vec();
+    for &i in &isolated {
+        clamped[i] = clamped[i].clamp(clamp.0, clamp.1);
+    }
+    let extremes = isolated
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &i| {
+            (lo.min(data[i]), hi.max(data[i]))
+        });
     let outliers = Outliers {
-        count,
+        count: isolated.len(),
         clamp,
-        extremes: (min, max),
+        extremes,
     };
     Some((clamped, outliers))
+}
+
+/// The samples `beyond` selects that lie in face-connected groups of at
+/// most [`MAX_GROUP`], in increasing order.
+fn isolated_groups(
+    data: &[f32],
+    [nx, ny, nz]: [usize; 3],
+    beyond: impl Fn(f32) -> bool,
+) -> Vec<usize> {
+    let far: HashSet<usize> = (0..data.len()).filter(|&i| beyond(data[i])).collect();
+    let mut seen = HashSet::new();
+    let mut isolated = Vec::new();
+    let plane = nx * ny;
+    for &start in &far {
+        if !seen.insert(start) {
+            continue;
+        }
+        let (mut group, mut stack) = (vec![start], vec![start]);
+        while let Some(i) = stack.pop() {
+            let (x, y, z) = (i % nx, (i / nx) % ny, i / plane);
+            let neighbours = [
+                (x > 0).then(|| i - 1),
+                (x + 1 < nx).then(|| i + 1),
+                (y > 0).then(|| i - nx),
+                (y + 1 < ny).then(|| i + nx),
+                (z > 0).then(|| i - plane),
+                (z + 1 < nz).then(|| i + plane),
+            ];
+            for n in neighbours.into_iter().flatten() {
+                if far.contains(&n) && seen.insert(n) {
+                    group.push(n);
+                    stack.push(n);
+                }
+            }
+        }
+        if group.len() <= MAX_GROUP {
+            isolated.extend(group);
+        }
+    }
+    isolated.sort_unstable();
+    isolated
 }
 
 #[cfg(test)]
@@ -81,9 +137,9 @@ mod tests {
 
     #[test]
     fn data_without_outliers_are_left_as_they_are() {
-        assert_eq!(clamp_outliers(&three_levels()), None);
+        assert_eq!(clamp_outliers(&three_levels(), [100, 100, 1]), None);
         // a constant image has no range to be outside of
-        assert_eq!(clamp_outliers(&[0.5; 100]), None);
+        assert_eq!(clamp_outliers(&[0.5; 100], [10, 10, 1]), None);
     }
 
     #[test]
@@ -92,7 +148,7 @@ mod tests {
         for i in [5, 505, 5005] {
             data[i] = 1.0;
         }
-        let (clamped, outliers) = clamp_outliers(&data).unwrap();
+        let (clamped, outliers) = clamp_outliers(&data, [100, 100, 1]).unwrap();
         assert_eq!(outliers.count, 3);
         assert_eq!(outliers.extremes.1, 1.0);
         // clamped well above the brightest level, far below the hot value
@@ -106,16 +162,23 @@ mod tests {
     }
 
     #[test]
-    fn a_bright_object_stays_brighter_than_every_phase() {
-        // 8 pixels of a 10 000 at 255 over levels 0 and 100
-        let mut data: Vec<f32> = (0..10_000)
-            .map(|i| if i < 5000 { 0.0 } else { 100.0 })
+    fn a_bright_object_of_a_few_pixels_is_left_as_it_is() {
+        // a 3×3 square at 255 over levels 0 and 100: 9 of 20 000 pixels
+        let (w, h) = (200, 100);
+        let mut data: Vec<f32> = (0..w * h)
+            .map(|i| if i < w * h / 2 { 0.0 } else { 100.0 })
             .collect();
-        for v in &mut data[9000..9008] {
-            *v = 255.0;
+        for y in 80..83 {
+            for x in 40..43 {
+                data[y * w + x] = 255.0;
+            }
         }
-        let (clamped, outliers) = clamp_outliers(&data).unwrap();
-        assert_eq!(outliers.count, 8);
-        assert!(clamped[9000] >= 200.0, "{outliers:?}");
+        assert_eq!(clamp_outliers(&data, [w, h, 1]), None);
+        // a pair of hot pixels elsewhere is clamped, the square is not
+        data[10 * w + 10] = 255.0;
+        data[10 * w + 11] = 255.0;
+        let (clamped, outliers) = clamp_outliers(&data, [w, h, 1]).unwrap();
+        assert_eq!(outliers.count, 2);
+        assert!(clamped[10 * w + 10] < 255.0 && clamped[81 * w + 41] == 255.0);
     }
 }
