@@ -285,7 +285,10 @@ impl Volume {
                 other => {
                     return Err(IoError::Unsupported {
                         path: path.to_path_buf(),
-                        reason: format!("page {nz} has colour type {other:?}, expected grayscale"),
+                        reason: format!(
+                            "page {nz} has colour type {other:?}, expected grayscale{}",
+                            colour_stack_hint(other)
+                        ),
                     })
                 }
             }
@@ -1348,6 +1351,19 @@ fn rational(v: f64) -> tiff::encoder::Rational {
     let d = (1e9 / v.max(1.0)).clamp(1.0, u32::MAX as f64).round() as u32;
     let n = (v * f64::from(d)).round().clamp(1.0, u32::MAX as f64) as u32;
     tiff::encoder::Rational { n, d }
+}
+
+/// What a stack refused for its colour pages may be: tifffile writes a
+/// grayscale array of 3 or 4 slices, or of 3 or 4 columns, as RGB(A)
+/// pages unless told otherwise.
+fn colour_stack_hint(colour: tiff::ColorType) -> &'static str {
+    match colour {
+        tiff::ColorType::RGB(_) | tiff::ColorType::RGBA(_) => {
+            " (a grayscale volume of 3 or 4 slices saved by tifffile is stored as colour \
+             unless written with photometric='minisblack')"
+        }
+        _ => "",
+    }
 }
 
 #[cfg(test)]

@@ -610,3 +610,25 @@ fn a_flat_noisy_volume_split_in_two_is_said_to_be_one_region() {
         "{warnings:?}"
     );
 }
+
+/// A stack whose pages are RGB is refused as colour, and the message names
+/// the likely cause: tifffile stores a (3, Y, X) grayscale array as one RGB
+/// page unless told `photometric='minisblack'`.
+#[test]
+fn an_rgb_stack_is_refused_with_the_tifffile_hint() {
+    let d = tmp();
+    let out = empty_out(&d);
+    let path = d.path().join("three_slices.tif");
+    let file = std::fs::File::create(&path).unwrap();
+    let mut tiff = tiff::encoder::TiffEncoder::new(file).unwrap();
+    let pixels: Vec<u8> = (0..12 * 12 * 3).map(|i| (i % 251) as u8).collect();
+    tiff.write_image::<tiff::encoder::colortype::RGB8>(12, 12, &pixels)
+        .unwrap();
+    let line = fails(
+        &SEGMENT3D,
+        &[path.to_str().unwrap()],
+        &out,
+        "colour type RGB(8)",
+    );
+    assert!(line.contains("photometric='minisblack'"), "{line}");
+}
