@@ -1,5 +1,6 @@
 //! Batch runs: many inputs (files, or folders of them) into one output
-//! directory, `DIR/<stem>/` per input, with a summary table `DIR/summary.csv`.
+//! directory, `DIR/<stem>/` per input (inputs of one stem take their folders' names,
+//! `s1_img`), with a summary table `DIR/summary.csv`.
 //!
 //! - A bad input fails its own row; the others still run.
 //! - An input whose outputs are complete and were made by the same command
@@ -385,14 +386,15 @@ impl Batch {
     /// with one stem, an unwritable output directory); each input's own
     /// failure is in its row.
     pub fn run(&self) -> Result<BatchOutcome> {
-        let mine: Vec<&PathBuf> = self
+        let names = output_names(&self.inputs)?;
+        let mine: Vec<(&PathBuf, String)> = self
             .inputs
             .iter()
+            .zip(names)
             .enumerate()
             .filter(|(i, _)| self.shard.is_none_or(|s| i % s.count == s.index))
-            .map(|(_, p)| p)
+            .map(|(_, named)| named)
             .collect();
-        check_unique_stems(&self.inputs)?;
         std::fs::create_dir_all(&self.out).map_err(|e| Error::OutputDir {
             path: self.out.clone(),
             reason: e.to_string(),
@@ -408,7 +410,7 @@ impl Batch {
     }
 
     /// Runs `inputs` on `jobs` threads; the rows in input order.
-    fn run_all(&self, inputs: &[&PathBuf]) -> Vec<Row> {
+    fn run_all(&self, inputs: &[(&PathBuf, String)]) -> Vec<Row> {
         let next = AtomicUsize::new(0);
         let finished = AtomicUsize::new(0);
         let rows: Mutex<Vec<Option<Row>>> = Mutex::new(vec![None; inputs.len()]);
@@ -419,10 +421,12 @@ impl Batch {
                     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build();
                     loop {
                         let i = next.fetch_add(1, Ordering::Relaxed);
-                        let Some(input) = inputs.get(i) else { break };
+                        let Some((input, name)) = inputs.get(i) else {
+                            break;
+                        };
                         let row = match &pool {
-                            Ok(pool) => pool.install(|| self.run_guarded(input)),
-                            Err(e) => error_row(input, format!("cannot start a thread: {e}")),
+                            Ok(pool) => pool.install(|| self.run_guarded(input, name)),
+                            Err(e) => error_row(input, name, format!("cannot start a thread: {e}")),
                         };
                         let done = finished.fetch_add(1, Ordering::Relaxed) + 1;
                         if !self.quiet {
@@ -437,24 +441,31 @@ impl Batch {
             .unwrap_or_else(|e| e.into_inner())
             .into_iter()
             .zip(inputs)
-            .map(|(row, input)| row.unwrap_or_else(|| error_row(input, "not run".into())))
+            .map(|(row, (input, name))| {
+                row.unwrap_or_else(|| error_row(input, name, "not run".into()))
+            })
             .collect()
     }
 
     /// One input's row; a panic becomes an error row rather than ending the batch.
-    fn run_guarded(&self, input: &Path) -> Row {
-        let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.run_one(input)));
+    fn run_guarded(&self, input: &Path, name: &str) -> Row {
+        let run =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.run_one(input, name)));
         match run {
             Ok(Ok(row)) => row,
-            Ok(Err(e)) => error_row(input, e.to_string().replace('\n', " ")),
-            Err(_) => error_row(input, "internal error (panic); please report it".into()),
+            Ok(Err(e)) => error_row(input, name, e.to_string().replace('\n', " ")),
+            Err(_) => error_row(
+                input,
+                name,
+                "internal error (panic); please report it".into(),
+            ),
         }
     }
 
-    /// Segments one input into `DIR/<stem>/`, or skips it if complete.
-    fn run_one(&self, input: &Path) -> Result<Row> {
+    /// Segments one input into `DIR/<name>/`, or skips it if complete.
+    fn run_one(&self, input: &Path, name: &str) -> Result<Row> {
         let start = Instant::now();
-        let dir = self.out.join(stem(input));
+        let dir = self.out.join(name);
         let fingerprint = self.fingerprint(input)?;
         if !self.force {
             if let Some(row) = self.completed(&dir, &fingerprint) {
@@ -500,7 +511,7 @@ impl Batch {
             .run()?,
         };
         let row = Row {
-            name: stem(input),
+            name: name.to_string(),
             input: input.to_path_buf(),
             // The run's own count (`--phases auto` chooses it).
             phases: Some(summary.final_means.len()),
@@ -585,25 +596,75 @@ impl Batch {
     }
 }
 
-/// Two inputs with one stem would write the same folder.
-fn check_unique_stems(inputs: &[PathBuf]) -> Result<()> {
-    let mut seen: HashMap<String, &PathBuf> = HashMap::new();
-    for p in inputs {
-        if let Some(other) = seen.insert(stem(p), p) {
-            return Err(Error::Usage(format!(
-                "inputs {} and {} would both write {:?}; rename one",
-                other.display(),
-                p.display(),
-                stem(p)
-            )));
+/// Each input's output folder name: its [`stem`], or, where several
+/// inputs share a stem (`s1/img.png`, `s2/img.png`), the stem after as many
+/// of its parent folders' names as tell them apart (`s1_img`, `s2_img`).
+/// Inputs that no parent tells apart (one file named twice) are refused,
+/// every clash in one message.
+fn output_names(inputs: &[PathBuf]) -> Result<Vec<String>> {
+    let mut by_stem: HashMap<String, Vec<usize>> = HashMap::new();
+    for (i, p) in inputs.iter().enumerate() {
+        by_stem.entry(stem(p)).or_default().push(i);
+    }
+    let mut names: Vec<String> = inputs.iter().map(|p| stem(p)).collect();
+    let mut clashes = Vec::new();
+    for (name, group) in by_stem.iter().filter(|(_, g)| g.len() > 1) {
+        let parents: Vec<Vec<String>> = group.iter().map(|&i| parent_names(&inputs[i])).collect();
+        let deepest = parents.iter().map(Vec::len).max().unwrap_or(0);
+        let depth = (1..=deepest).find(|&d| {
+            let named: HashSet<Vec<&String>> = parents
+                .iter()
+                .map(|p| p.iter().rev().take(d).collect())
+                .collect();
+            named.len() == group.len()
+        });
+        match depth {
+            Some(d) => {
+                for (&i, p) in group.iter().zip(&parents) {
+                    let mut parts: Vec<&str> = p.iter().rev().take(d).map(String::as_str).collect();
+                    parts.reverse();
+                    names[i] = format!("{}_{name}", parts.join("_"));
+                }
+            }
+            None => {
+                let listed: Vec<String> = group
+                    .iter()
+                    .map(|&i| inputs[i].display().to_string())
+                    .collect();
+                clashes.push(format!("{} would all write {name:?}", listed.join(", ")));
+            }
         }
     }
-    Ok(())
+    if !clashes.is_empty() {
+        clashes.sort();
+        return Err(Error::Usage(format!(
+            "inputs {}; name each file once",
+            clashes.join("; ")
+        )));
+    }
+    Ok(names)
 }
 
-fn error_row(input: &Path, error: String) -> Row {
+/// The names of the folders that hold `path`, outermost first (of its
+/// absolute path where it can be found, so that `img.png` and
+/// `../b/img.png` are told apart).
+fn parent_names(path: &Path) -> Vec<String> {
+    let full = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    full.parent()
+        .map(|p| {
+            p.components()
+                .filter_map(|c| match c {
+                    std::path::Component::Normal(n) => Some(n.to_string_lossy().into_owned()),
+                    _ => None,
+                })
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+fn error_row(input: &Path, name: &str, error: String) -> Row {
     Row {
-        name: stem(input),
+        name: name.to_string(),
         input: input.to_path_buf(),
         phases: None,
         iterations: None,
@@ -653,4 +714,27 @@ fn summary_csv(rows: &[Row]) -> Result<Vec<u8>> {
     }
     w.into_inner()
         .map_err(|e| Error::Usage(format!("summary table: {e}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inputs_named_alike_take_their_folders_names() {
+        let p = |s: &str| PathBuf::from(s);
+        let inputs = [p("x/s1/img.png"), p("x/s2/img.png"), p("y/b.png")];
+        assert_eq!(output_names(&inputs).unwrap(), ["s1_img", "s2_img", "b"]);
+        // the same folder name twice: one more level
+        let deeper = [p("u/day1/img.png"), p("v/day1/img.png")];
+        assert_eq!(output_names(&deeper).unwrap(), ["u_day1_img", "v_day1_img"]);
+        // one folder, one stem: nothing tells them apart, every clash named
+        let same = [p("z/a.png"), p("z/a.tif"), p("z/c.png"), p("z/c.jpg")];
+        let err = output_names(&same).unwrap_err().to_string();
+        assert!(
+            err.contains("z/a.png, z/a.tif would all write \"a\"")
+                && err.contains("z/c.png, z/c.jpg would all write \"c\""),
+            "{err}"
+        );
+    }
 }
