@@ -352,7 +352,7 @@ fn grow(
 
 /// The up to six face neighbours of linear index `i` in a volume of `dims`
 /// (four in 2D).
-fn face_neighbours(i: usize, [nx, ny, nz]: [usize; 3]) -> [Option<usize>; 6] {
+pub(crate) fn face_neighbours(i: usize, [nx, ny, nz]: [usize; 3]) -> [Option<usize>; 6] {
     let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
     let plane = nx * ny;
     [

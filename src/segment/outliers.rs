@@ -19,6 +19,7 @@
 //! clamped.
 
 use super::intensity::{robust_range, MAX_SAMPLES};
+use super::missed_objects::face_neighbours;
 use std::collections::HashSet;
 
 /// The largest face-connected group of samples beyond the bound that
@@ -82,31 +83,17 @@ pub fn clamp_outliers(data: &[f32], dims: [usize; 3]) -> Option<(Vec<f32>, Outli
 
 /// The samples `beyond` selects that lie in face-connected groups of at
 /// most [`MAX_GROUP`], in increasing order.
-fn isolated_groups(
-    data: &[f32],
-    [nx, ny, nz]: [usize; 3],
-    beyond: impl Fn(f32) -> bool,
-) -> Vec<usize> {
+fn isolated_groups(data: &[f32], dims: [usize; 3], beyond: impl Fn(f32) -> bool) -> Vec<usize> {
     let far: HashSet<usize> = (0..data.len()).filter(|&i| beyond(data[i])).collect();
     let mut seen = HashSet::new();
     let mut isolated = Vec::new();
-    let plane = nx * ny;
     for &start in &far {
         if !seen.insert(start) {
             continue;
         }
         let (mut group, mut stack) = (vec![start], vec![start]);
         while let Some(i) = stack.pop() {
-            let (x, y, z) = (i % nx, (i / nx) % ny, i / plane);
-            let neighbours = [
-                (x > 0).then(|| i - 1),
-                (x + 1 < nx).then(|| i + 1),
-                (y > 0).then(|| i - nx),
-                (y + 1 < ny).then(|| i + nx),
-                (z > 0).then(|| i - plane),
-                (z + 1 < nz).then(|| i + plane),
-            ];
-            for n in neighbours.into_iter().flatten() {
+            for n in face_neighbours(i, dims).into_iter().flatten() {
                 if far.contains(&n) && seen.insert(n) {
                     group.push(n);
                     stack.push(n);
