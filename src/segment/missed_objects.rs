@@ -138,22 +138,31 @@ impl MissedObjects {
     /// The warning of objects the labels kept smaller than they look.
     fn shrunk_warning(&self, samples: &str, at: &str, finer: &str) -> String {
         let total = self.pixels + self.labelled;
-        let what = if self.count == 1 {
-            format!(
-                "1 object that looks like phase {} ({total} {samples} centred at {at}) is",
-                self.phase
+        let (what, it, its) = if self.count == 1 {
+            (
+                format!(
+                    "1 object that looks like phase {} ({total} {samples} centred at {at}) is \
+                     labelled smaller than it looks",
+                    self.phase
+                ),
+                "it",
+                "its area is",
             )
         } else {
-            format!(
-                "{} objects that look like phase {} ({total} {samples} in all, the largest {} \
-                 centred at {at}) are",
-                self.count, self.phase, self.largest
+            (
+                format!(
+                    "{} objects that look like phase {} ({total} {samples} in all, the largest \
+                     {} centred at {at}) are labelled smaller than they look",
+                    self.count, self.phase, self.largest
+                ),
+                "them",
+                "their areas are",
             )
         };
         format!(
-            "{what} labelled smaller than they look: {} of the {total} {samples} carry phase \
-             {}, the rest phase {}, so their areas are underestimated (objects of a few cells; \
-             a lower --length-weight or {finer} may keep more of them)",
+            "{what}: {} of the {total} {samples} carry phase {}, the rest phase {}, so {its} \
+             underestimated (objects of a few cells; a lower --length-weight or {finer} may \
+             keep more of {it})",
             self.labelled, self.phase, self.within
         )
     }
