@@ -28,6 +28,13 @@
 //! grow stricter as the noise grows smoother. A region touching several
 //! labels (the band a blurred edge leaves between two phases) or beside a
 //! third class (a corner the length term rounded off) is not counted.
+//!
+//! A region beside a core labelled with its class is the rim of an object
+//! the labels kept: the rims of one core (of at most [`MAX_CORE`] samples;
+//! a rim broken by the corners of a square core is several regions) are
+//! gathered, and where the core holds under [`SHRUNK_SHARE`] of the object
+//! it counts as kept smaller than it looks (a spot of a few cells whose
+//! area comes out too small; [`MissedObjects::labelled`]).
 
 use super::check_image::CHECK_SMOOTHING;
 use super::image::ImageView;
@@ -445,23 +452,19 @@ impl Cores {
             return (k != LARGE).then_some(k);
         }
         let l = labels[at];
-        let (mut core, mut stack) = (vec![at], vec![at]);
-        let mut seen = HashSet::from([at]);
+        let (mut core, mut stack) = (HashSet::from([at]), vec![at]);
         let mut large = false;
-        while let Some(i) = stack.pop() {
+        'grow: while let Some(i) = stack.pop() {
             for n in face_neighbours(i, dims).into_iter().flatten() {
-                if labels[n] != l || !seen.insert(n) {
+                if labels[n] != l || core.contains(&n) {
                     continue;
                 }
                 if self.core_of.get(&n) == Some(&LARGE) || core.len() >= MAX_CORE {
                     large = true;
-                    break;
+                    break 'grow;
                 }
-                core.push(n);
+                core.insert(n);
                 stack.push(n);
-            }
-            if large {
-                break;
             }
         }
         let k = if large { LARGE } else { self.cores.len() };
