@@ -32,8 +32,9 @@ pub enum IoError {
         /// The unsupported feature.
         reason: String,
     },
-    /// A multi-page ImageJ TIFF whose pages are not one volume's slices (a
-    /// time series, or a hyperstack of channels, slices and time points).
+    /// A multi-page TIFF whose pages are not one volume's slices: an ImageJ
+    /// or OME-TIFF time series or hyperstack of channels, slices and time
+    /// points, or an OME-TIFF whose pages are not those its OME-XML declares.
     #[error("{path} is {reason}")]
     NotOneVolume {
         /// The offending path.

@@ -1,32 +1,48 @@
-//! ImageJ hyperstacks and time series: TIFFs whose pages are not the slices
-//! of one volume.
+//! Hyperstacks and time series: TIFFs whose pages are not the slices of one
+//! volume.
 //!
 //! Fiji stores a hyperstack of C channels, Z slices and T frames as C·Z·T
 //! pages back to back, saying so only in its `ImageJ=` description
-//! (`channels=`, `slices=`, `frames=`). Read page by page it looks like one
-//! stack of C·Z·T slices, and segmenting that would mix channels and time
-//! points into one "volume" without a word. The readers refuse it instead,
-//! naming the extents, so the user picks one channel and one time point.
+//! (`channels=`, `slices=`, `frames=`); an OME-TIFF says so in its OME-XML
+//! (`SizeC`, `SizeZ`, `SizeT`, see [`super::ome`]). Read page by page it
+//! looks like one stack of C·Z·T slices, and segmenting that would mix
+//! channels and time points into one "volume" without a word. The readers
+//! refuse it instead, naming the extents, so the user picks one channel and
+//! one time point.
 //!
-//! Pages that interleave two of these axes are refused, and so are time
-//! points alone (`frames=T`, no slices: a time-lapse of one plane, which
+//! ImageJ pages that interleave two of these axes are refused, and so are
+//! time points alone (`frames=T`, no slices: a time-lapse of one plane, which
 //! Fiji and tifffile's `imwrite(..., imagej=True, metadata={'axes': 'TYX'})`
 //! declare only for frames): segmented as a volume, time would be meshed as
 //! depth, its interfaces smoothed across frames and measured in voxels of a
-//! time step. A run of channels alone is read as slices: tifffile's
+//! time step. A run of ImageJ channels alone is read as slices: tifffile's
 //! `imwrite(..., imagej=True)` of a 3-D array without axes declares
-//! `channels=N` for what its writer meant as N slices.
+//! `channels=N` for what its writer meant as N slices. OME-XML names its
+//! axes, so there more than one channel or time point is refused.
 
-/// The channels, slices and frames an `ImageJ=` description declares
-/// (each 1 when not given).
+use super::ome::OmeLayout;
+
+/// The channels, slices and frames a TIFF's description declares (each 1
+/// when not given).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Hyperstack {
-    /// Channels (`channels=`).
+    /// Channels (`channels=`, `SizeC`).
     pub channels: usize,
-    /// Z slices (`slices=`).
+    /// Z slices (`slices=`, `SizeZ`).
     pub slices: usize,
-    /// Time points (`frames=`).
+    /// Time points (`frames=`, `SizeT`).
     pub frames: usize,
+    /// Which description declares them.
+    pub metadata: Metadata,
+}
+
+/// The description that declares a [`Hyperstack`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Metadata {
+    /// Fiji/ImageJ's `ImageJ=` description.
+    ImageJ,
+    /// An OME-TIFF's OME-XML.
+    OmeXml,
 }
 
 impl Hyperstack {
@@ -50,6 +66,7 @@ impl Hyperstack {
             channels: count("channels="),
             slices: count("slices="),
             frames: count("frames="),
+            metadata: Metadata::ImageJ,
         };
         let interleaved = [stack.channels, stack.slices, stack.frames]
             .iter()
@@ -64,31 +81,57 @@ impl Hyperstack {
         self.frames > 1 && self.slices == 1 && self.channels == 1
     }
 
-    /// The hyperstack the current TIFF page's description declares, if any.
+    /// The hyperstack the current TIFF page's description declares, if any:
+    /// an ImageJ one (see [`Hyperstack::from_description`]), or an OME-TIFF
+    /// whose first series has more than one channel or time point.
     pub fn of_tiff<R: std::io::Read + std::io::Seek>(
         dec: &mut tiff::decoder::Decoder<R>,
     ) -> Option<Self> {
         match dec.find_tag(tiff::tags::Tag::ImageDescription) {
-            Ok(Some(tiff::decoder::ifd::Value::Ascii(d))) => Self::from_description(&d),
+            Ok(Some(tiff::decoder::ifd::Value::Ascii(d))) => {
+                Self::from_description(&d).or_else(|| OmeLayout::from_description(&d)?.hyperstack())
+            }
             _ => None,
         }
     }
 
-    /// Why such a file is refused, and what to do instead.
+    /// Why such a file is refused, and what to do instead; completes
+    /// "`path` is …".
     pub fn refusal(&self) -> String {
-        if self.is_time_series() {
-            return format!(
+        match (self.metadata, self.is_time_series()) {
+            (Metadata::ImageJ, true) => format!(
                 "an ImageJ time series of {}, not the slices of a volume: segment each \
                  time point as an image with `dsc-seg segment` (Fiji: Image › Stacks › \
                  Stack to Images, then save them to a folder), or, if the pages are Z \
                  slices, say so (Fiji: Image › Properties…, {} slices, 1 frame)",
                 counted(self.frames, "time point"),
                 self.frames
-            );
+            ),
+            (Metadata::OmeXml, true) => format!(
+                "an OME-TIFF time series of {} (OME-XML), not the slices of a volume: \
+                 segment each time point as an image with `dsc-seg segment` (Fiji: Image › \
+                 Stacks › Stack to Images, then save them to a folder)",
+                counted(self.frames, "time point")
+            ),
+            (Metadata::ImageJ, false) => format!(
+                "an ImageJ hyperstack of {}; its pages are not one volume: save one channel \
+                 at one time point (Fiji: Image › Duplicate…) and segment that",
+                self.extents()
+            ),
+            (Metadata::OmeXml, false) => format!(
+                "an OME-TIFF of {} (OME-XML); its pages are not one volume: save one channel \
+                 at one time point as a file of its own (Fiji: Image › Duplicate…; tifffile: \
+                 index `imread(file)` along the axes `TiffFile(file).series[0].axes` names, \
+                 then `imwrite(..., ome=True)`) and segment that",
+                self.extents()
+            ),
         }
+    }
+
+    /// "2 channels × 30 slices × 1 time point".
+    fn extents(&self) -> String {
         format!(
-            "an ImageJ hyperstack of {} × {} × {}; its pages are not one volume: \
-             save one channel at one time point (Fiji: Image › Duplicate…) and segment that",
+            "{} × {} × {}",
             counted(self.channels, "channel"),
             counted(self.slices, "slice"),
             counted(self.frames, "time point")
@@ -97,7 +140,7 @@ impl Hyperstack {
 }
 
 /// `n` and the noun, in the plural unless `n` is 1.
-fn counted(n: usize, noun: &str) -> String {
+pub(super) fn counted(n: usize, noun: &str) -> String {
     if n == 1 {
         format!("1 {noun}")
     } else {

@@ -10,6 +10,7 @@ pub mod frame;
 pub mod hyperstack;
 pub mod image2;
 pub mod intensity;
+pub mod ome;
 pub mod render;
 pub mod resolution;
 pub mod surface;

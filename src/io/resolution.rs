@@ -241,24 +241,11 @@ pub struct OmeSizes {
 /// not a positive number or a unit that is not a length (`why` completes
 /// "its OME-XML description …").
 pub fn ome_sizes(description: &str) -> Option<Result<OmeSizes, String>> {
-    let text = description.trim_start();
-    if !text.starts_with('<') {
-        return None;
-    }
-    let doc = match roxmltree::Document::parse(text) {
+    let doc = match super::ome::document(description)? {
         Ok(doc) => doc,
-        Err(e) if text.contains("<OME") => {
-            return Some(Err(format!("is not well-formed XML ({e})")))
-        }
-        Err(_) => return None,
+        Err(why) => return Some(Err(why)),
     };
-    if doc.root_element().tag_name().name() != "OME" {
-        return None;
-    }
-    let Some(pixels) = doc
-        .descendants()
-        .find(|n| n.is_element() && n.tag_name().name() == "Pixels")
-    else {
+    let Some(pixels) = super::ome::first_pixels(&doc) else {
         return Some(Err("has no Pixels element".into()));
     };
     const AXES: [(&str, &str); 3] = [

@@ -41,6 +41,7 @@ use super::frame::{Affine, Frame, FrameSource};
 use super::hyperstack::Hyperstack;
 use super::image2::{lerp_nodes, Colour, Image2, SampleType};
 use super::intensity::IntensityMap;
+use super::ome::OmeLayout;
 use super::resolution::{tiff_sizes, Resolution};
 
 /// A 3D grayscale volume (x fastest, then y, then z) with intensities in
@@ -64,6 +65,8 @@ pub struct Volume {
     nifti_header: Option<Vec<u8>>,
     /// Warnings of reading the voxel size (see [`Volume::size_warnings`]).
     size_warnings: Vec<String>,
+    /// That only the first series was read (see [`Volume::series_warning`]).
+    series_warning: Option<String>,
 }
 
 impl Volume {
@@ -92,6 +95,7 @@ impl Volume {
             source: FrameSource::Default,
             nifti_header: None,
             size_warnings: Vec::new(),
+            series_warning: None,
         }
     }
 
@@ -159,6 +163,12 @@ impl Volume {
     /// no `PhysicalSizeZ` for its slices. Empty once [`Volume::respaced`].
     pub fn size_warnings(&self) -> &[String] {
         &self.size_warnings
+    }
+
+    /// That only the first series of an OME-TIFF of several was read, one
+    /// line naming the file.
+    pub fn series_warning(&self) -> Option<&str> {
+        self.series_warning.as_deref()
     }
 
     /// The header of the NIfTI file this volume was read from.
@@ -232,6 +242,12 @@ impl Volume {
     /// from an OME-TIFF's OME-XML or the resolution tags and Fiji/ImageJ
     /// metadata when present (unit spacing otherwise; see
     /// [`tiff_sizes`]).
+    ///
+    /// A hyperstack of several channels or time points (ImageJ's or an
+    /// OME-TIFF's, see [`Hyperstack`]) is refused. Of an OME-TIFF only the
+    /// first series is read ([`Volume::series_warning`] says so when there
+    /// are more), and one whose page count is not what its OME-XML declares
+    /// is refused.
     pub fn load_tiff(path: impl AsRef<Path>) -> Result<Self> {
         use tiff::decoder::{Decoder, DecodingResult};
         let path = path.as_ref();
@@ -251,6 +267,7 @@ impl Volume {
                 reason: stack.refusal(),
             });
         }
+        let ome = OmeLayout::of_tiff(&mut dec);
         let mut raw = Samples::U8(Vec::new());
         let mut sample_type = SampleType::Uint8;
         let (mut nx, mut ny, mut nz) = (0usize, 0usize, 0usize);
@@ -331,10 +348,14 @@ impl Volume {
                     reason: format!("page {} holds the wrong number of samples", nz - 1),
                 });
             }
-            if !dec.more_images() {
+            let series_read = ome.as_ref().is_some_and(|o| nz == o.pages());
+            if series_read || !dec.more_images() {
                 break;
             }
             dec.next_image().map_err(bad)?;
+        }
+        if let Some(ome) = &ome {
+            refuse_unlike_ome(path, ome, nz, &mut dec)?;
         }
         let (data, intensity) = raw.normalise().map_err(|samples| IoError::NonFinite {
             path: path.to_path_buf(),
@@ -363,6 +384,7 @@ impl Volume {
             nifti_header: None,
             source: sizes.source,
             size_warnings,
+            series_warning: ome.and_then(|o| o.series_warning(path)),
         })
     }
 
@@ -598,6 +620,30 @@ impl Samples {
             )),
             Samples::F64(v) => min_max_normalise(&v),
         }
+    }
+}
+
+/// Refuses an OME-TIFF whose pages are not those its OME-XML declares,
+/// `read` of them read (the first series', or all there are when fewer): of
+/// one series, the pages after it are counted, and there must be none.
+fn refuse_unlike_ome<R: Read + std::io::Seek>(
+    path: &Path,
+    ome: &OmeLayout,
+    read: usize,
+    dec: &mut tiff::decoder::Decoder<R>,
+) -> Result<()> {
+    let mut pages = read;
+    if ome.series == 1 {
+        while dec.more_images() && dec.next_image().is_ok() {
+            pages += 1;
+        }
+    }
+    match ome.page_mismatch(pages) {
+        Some(reason) => Err(IoError::NotOneVolume {
+            path: path.to_path_buf(),
+            reason,
+        }),
+        None => Ok(()),
     }
 }
 

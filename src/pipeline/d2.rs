@@ -11,6 +11,7 @@ use super::{
 use crate::dim::D2;
 use crate::error::{Error, Result};
 use crate::io::intensity::IntensityMap;
+use crate::io::ome::OmeLayout;
 use crate::io::resolution::{image_frame_and_warnings, is_tiff};
 use crate::io::{save_gray8_png, Colour, Frame, Image2, IoError, Overlay, Volume};
 use crate::phantom::{self, Phantom2Kind};
@@ -298,7 +299,8 @@ fn gif_frames<R: std::io::BufRead + std::io::Seek>(file: R) -> Option<String> {
 }
 
 /// A multi-page TIFF is a volume (or a hyperstack, refused by both readers):
-/// `segment` would read its first page only.
+/// `segment` would read its first page only. Of an OME-TIFF, only the
+/// first series counts, and its pages must be those its OME-XML declares.
 fn refuse_stacks(path: &Path) -> Result<()> {
     if !crate::io::resolution::is_tiff(path) {
         return Ok(());
@@ -316,13 +318,24 @@ fn refuse_stacks(path: &Path) -> Result<()> {
             stack.refusal()
         )));
     }
+    let ome = OmeLayout::of_tiff(&mut dec);
     let mut pages = 1usize;
     while dec.more_images() && dec.next_image().is_ok() {
         pages += 1;
     }
+    let mut in_series = "";
+    if let Some(ome) = ome {
+        if let Some(reason) = ome.page_mismatch(pages) {
+            return Err(Error::Usage(format!("{} is {reason}", path.display())));
+        }
+        if ome.series > 1 {
+            (pages, in_series) = (ome.pages(), " in its first series");
+        }
+    }
     if pages > 1 {
         return Err(Error::Usage(format!(
-            "{} has {pages} pages: a multi-page TIFF is a volume, segment it with `dsc-seg segment3d`",
+            "{} has {pages} pages{in_series}: a multi-page TIFF is a volume, segment it with \
+             `dsc-seg segment3d`",
             path.display()
         )));
     }
@@ -457,10 +470,13 @@ pub(crate) fn segment_image_then<T>(
     }
     let (frame, size_warnings) = input_frame(image, &provenance.source);
     if let Source::File(path) = &provenance.source {
+        let series = is_tiff(path)
+            .then(|| OmeLayout::of_file(path)?.series_warning(path))
+            .flatten();
         let alpha = image.transparency().warning(path, w * h);
         report
             .warnings
-            .splice(0..0, alpha.into_iter().chain(size_warnings));
+            .splice(0..0, series.into_iter().chain(alpha).chain(size_warnings));
     }
     if let Some((_, warning)) = &clamped {
         report.warnings.insert(0, warning.clone());

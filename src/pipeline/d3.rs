@@ -332,11 +332,13 @@ pub(crate) fn segment_volume_then<T>(
     if let Some((_, warning)) = &clamped {
         report.warnings.insert(0, warning.clone());
     }
-    // What reading the voxel size left to say comes first, as it concerns
-    // every length of the result.
-    report
-        .warnings
-        .splice(0..0, volume.size_warnings().iter().cloned());
+    // What reading the file left to say comes first: which series was read,
+    // and the voxel size, which concerns every length of the result.
+    let series = volume.series_warning().map(String::from);
+    report.warnings.splice(
+        0..0,
+        series.into_iter().chain(volume.size_warnings().to_vec()),
+    );
     let segment_seconds = t_seg.elapsed().as_secs_f64();
 
     let labels = seg.label_image();

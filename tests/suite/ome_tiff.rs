@@ -2,9 +2,11 @@
 //! the physical pixel/voxel size of the OME-XML in the first page's
 //! description is the frame of every output, ahead of the plain resolution
 //! tags; an OME-XML whose sizes cannot be used falls back to the tags with
-//! one warning line naming the file.
+//! one warning line naming the file. Several channels or time points are
+//! refused, naming the extents; of several series the first is segmented,
+//! with a warning; pages the OME-XML does not declare are refused.
 
-use crate::cli::{bin, tmp};
+use crate::cli::{bin, empty_out, fails, tmp, SEGMENT, SEGMENT3D};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use tiff::encoder::{colortype::Gray8, Rational, TiffEncoder};
@@ -17,14 +19,33 @@ const MICRO: &str = "~~";
 /// OME-XML whose `Pixels` element has the attributes `sizes` (e.g.
 /// `PhysicalSizeX="0.5"`), "µm" written as [`MICRO`].
 fn ome_xml(nx: usize, ny: usize, nz: usize, sizes: &str) -> String {
+    ome_document(&[ome_series(0, 0, [nx, ny, nz, 1, 1], sizes)])
+}
+
+/// An OME document of these `Image` elements (series), as tifffile writes it.
+fn ome_document(images: &[String]) -> String {
     format!(
         "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\
          <OME xmlns=\"http://www.openmicroscopy.org/Schemas/OME/2016-06\" \
-         Creator=\"tifffile.py 2026.3.3\"><Image ID=\"Image:0\" Name=\"Image0\">\
-         <Pixels ID=\"Pixels:0\" DimensionOrder=\"XYZCT\" Type=\"uint8\" SizeX=\"{nx}\" \
-         SizeY=\"{ny}\" SizeZ=\"{nz}\" SizeC=\"1\" SizeT=\"1\" {sizes}>\
-         <Channel ID=\"Channel:0:0\" SamplesPerPixel=\"1\"/>\
-         <TiffData IFD=\"0\" PlaneCount=\"{nz}\"/></Pixels></Image></OME>"
+         Creator=\"tifffile.py 2026.3.3\">{}</OME>",
+        images.concat()
+    )
+}
+
+/// Series `i` of an OME document, `[SizeX, SizeY, SizeZ, SizeC, SizeT]`
+/// in tifffile's order (`XYZCT`: slices fastest), its `Pixels` with the
+/// attributes `sizes` and its pages from IFD `first_page` on.
+fn ome_series(i: usize, first_page: usize, extents: [usize; 5], sizes: &str) -> String {
+    let [nx, ny, nz, nc, nt] = extents;
+    let channels: String = (0..nc)
+        .map(|c| format!("<Channel ID=\"Channel:{i}:{c}\" SamplesPerPixel=\"1\"/>"))
+        .collect();
+    format!(
+        "<Image ID=\"Image:{i}\" Name=\"Image{i}\">\
+         <Pixels ID=\"Pixels:{i}\" DimensionOrder=\"XYZCT\" Type=\"uint8\" SizeX=\"{nx}\" \
+         SizeY=\"{ny}\" SizeZ=\"{nz}\" SizeC=\"{nc}\" SizeT=\"{nt}\" {sizes}>{channels}\
+         <TiffData IFD=\"{first_page}\" PlaneCount=\"{}\"/></Pixels></Image>",
+        nz * nc * nt
     )
 }
 
@@ -346,4 +367,149 @@ fn a_2d_ome_tiff_gives_its_pixel_size() {
         input.display()
     );
     assert!(err.contains(&line), "{err}");
+}
+
+/// The sizes of [`ball`]'s voxels, in µm.
+const BALL_SIZES: &str = "PhysicalSizeX=\"0.5\" PhysicalSizeY=\"0.5\" PhysicalSizeZ=\"2.0\"";
+
+/// Writes `pages` pages of [`ball`]'s planes (page `p` is plane `p % 12`)
+/// to `name` in `dir`, described by `description`.
+fn ball_pages(dir: &Path, name: &str, pages: usize, description: &str) -> PathBuf {
+    let path = dir.join(name);
+    let [nx, ny, nz] = DIMS;
+    let plane = |x, y, p| ball(x, y, p % nz);
+    write_tiff(&path, [nx, ny, pages], description, None, plane);
+    path
+}
+
+/// The OME-XML of one series of [`ball`]'s planes with these slices,
+/// channels and time points.
+fn ball_series([nz, nc, nt]: [usize; 3]) -> String {
+    let [nx, ny, _] = DIMS;
+    ome_document(&[ome_series(0, 0, [nx, ny, nz, nc, nt], BALL_SIZES)])
+}
+
+/// A z-stack of two channels is 24 pages, not a volume of 24 slices: both
+/// commands refuse it in one line naming its extents and where they were
+/// read, `segment` without pointing to `segment3d`.
+#[test]
+fn an_ome_tiff_of_two_channels_is_refused_by_both_commands() {
+    let d = tmp();
+    let input = ball_pages(
+        d.path(),
+        "two_channels.ome.tif",
+        24,
+        &ball_series([12, 2, 1]),
+    );
+    let args = [input.to_str().unwrap()];
+    let said = "two_channels.ome.tif is an OME-TIFF of 2 channels × 12 slices × 1 time point \
+                (OME-XML); its pages are not one volume: save one channel at one time point";
+    fails(&SEGMENT3D, &args, &empty_out(&d), said);
+    let from_2d = fails(&SEGMENT, &args, &d.path().join("o2"), said);
+    assert!(!from_2d.contains("segment3d"), "{from_2d}");
+}
+
+/// Three time points of a z-stack, and three of one plane (a time-lapse),
+/// are refused by both commands, naming the time points.
+#[test]
+fn an_ome_tiff_of_three_time_points_is_refused_by_both_commands() {
+    let d = tmp();
+    let stacks = ball_pages(d.path(), "stacks.ome.tif", 36, &ball_series([12, 1, 3]));
+    let args = [stacks.to_str().unwrap()];
+    let extents = "an OME-TIFF of 1 channel × 12 slices × 3 time points (OME-XML)";
+    fails(&SEGMENT3D, &args, &empty_out(&d), extents);
+    fails(&SEGMENT, &args, &d.path().join("o2"), extents);
+    let lapse = ball_pages(d.path(), "lapse.ome.tif", 3, &ball_series([1, 1, 3]));
+    let args = [lapse.to_str().unwrap()];
+    let series = "lapse.ome.tif is an OME-TIFF time series of 3 time points (OME-XML), not \
+                  the slices of a volume: segment each time point as an image";
+    fails(&SEGMENT3D, &args, &d.path().join("o3"), series);
+    fails(&SEGMENT, &args, &d.path().join("o4"), series);
+}
+
+/// A stack that says `SizeC="1" SizeT="1"` is read as before: its 12
+/// slices in its voxel size, nothing said.
+#[test]
+fn an_ome_tiff_of_one_channel_and_time_point_is_one_volume() {
+    let d = tmp();
+    let input = ball_pages(d.path(), "one.ome.tif", 12, &ball_series([12, 1, 1]));
+    let (report, err) = run("segment3d", &input, &["--phases", "2"], &d.path().join("o"));
+    assert_eq!(report["frame"]["dims"], json!([40, 40, 12]));
+    assert_eq!(report["frame"]["spacing"], json!([0.5, 0.5, 2.0]));
+    assert_eq!(report["frame"]["source"], "ome_xml");
+    assert_eq!(report["warnings"], json!([]), "{err}");
+}
+
+/// A file of two series (a stack of 12 slices, then 4 other pages) is
+/// segmented as its first series, in its voxel size, with a warning on
+/// stderr and in the report; `segment` takes a first series of one plane
+/// the same way.
+#[test]
+fn of_two_ome_series_the_first_is_segmented_with_a_warning() {
+    let d = tmp();
+    let [nx, ny, nz] = DIMS;
+    let other = "PhysicalSizeX=\"1\" PhysicalSizeY=\"1\"";
+    let two = ome_document(&[
+        ome_series(0, 0, [nx, ny, nz, 1, 1], BALL_SIZES),
+        ome_series(1, nz, [nx, ny, 4, 1, 1], other),
+    ]);
+    let input = ball_pages(d.path(), "two_series.ome.tif", nz + 4, &two);
+    let (report, err) = run("segment3d", &input, &["--phases", "2"], &d.path().join("a"));
+    assert_eq!(report["frame"]["dims"], json!([40, 40, 12]));
+    assert_eq!(report["frame"]["spacing"], json!([0.5, 0.5, 2.0]));
+    let said = format!(
+        "warning: {}: its OME-XML describes 2 series; only the first (12 slices) is segmented",
+        input.display()
+    );
+    assert!(err.contains(&said), "{err}");
+    let warnings = report["warnings"].as_array().unwrap();
+    assert!(
+        warnings[0]
+            .as_str()
+            .unwrap()
+            .contains("only the first (12 slices)"),
+        "{warnings:?}"
+    );
+
+    let planes = ome_document(&[
+        ome_series(0, 0, [nx, ny, 1, 1, 1], BALL_SIZES),
+        ome_series(1, 1, [nx, ny, 1, 1, 1], other),
+    ]);
+    let input = d.path().join("two_planes.ome.tif");
+    let middle = |x, y, _| ball(x, y, 6);
+    write_tiff(&input, [nx, ny, 2], &planes, None, middle);
+    let (report, err) = run("segment", &input, &["--phases", "2"], &d.path().join("b"));
+    assert_eq!(report["frame"]["spacing"], json!([0.5, 0.5, 1.0]));
+    assert!(
+        err.contains("describes 2 series; only the first (1 slice)"),
+        "{err}"
+    );
+    let warnings = report["warnings"].as_array().unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("2 series")),
+        "{warnings:?}"
+    );
+}
+
+/// Pages that are not those the OME-XML declares (more than its one
+/// series, or fewer than its first) are refused by both commands.
+#[test]
+fn ome_tiff_pages_unlike_the_declared_ones_are_refused() {
+    let d = tmp();
+    let more = ball_pages(d.path(), "more.ome.tif", 15, &ball_series([12, 1, 1]));
+    let args = [more.to_str().unwrap()];
+    let said = "more.ome.tif is an OME-TIFF of 15 pages whose OME-XML declares 12 pages for \
+                1 channel × 12 slices × 1 time point";
+    fails(&SEGMENT3D, &args, &empty_out(&d), said);
+    fails(&SEGMENT, &args, &d.path().join("o2"), said);
+    let fewer = ball_pages(d.path(), "fewer.ome.tif", 10, &ball_series([12, 1, 1]));
+    let args = [fewer.to_str().unwrap()];
+    fails(
+        &SEGMENT3D,
+        &args,
+        &d.path().join("o3"),
+        "of 10 pages whose OME-XML declares 12",
+    );
 }
