@@ -39,7 +39,6 @@
 use super::check_image::CHECK_SMOOTHING;
 use super::image::ImageView;
 use serde::Serialize;
-use std::collections::{HashMap, HashSet};
 
 /// How many standard errors of the noise a region's mean must lie from the
 /// enclosing phase's mean to count.
@@ -400,13 +399,27 @@ pub const MAX_CORE: usize = 4096;
 /// core is one object's.
 #[derive(Default)]
 struct Cores {
-    /// Per sample of a core explored: the core's index, or `usize::MAX`
-    /// for a core larger than [`MAX_CORE`].
-    core_of: HashMap<usize, usize>,
+    /// Per sample (made at the first rim): [`UNEXPLORED`], [`LARGE`] for a
+    /// sample of a core larger than [`MAX_CORE`], or the index of its core.
+    /// A dense array rather than a map: the rims along a large object's
+    /// boundary explore up to [`MAX_CORE`] samples each before they meet
+    /// the samples marked large, and hashing them cost as much as half the
+    /// segmentation of a 256² image.
+    core_of: Vec<u32>,
     /// Per core: its size, its rims together, and whether they agree on
     /// the phases.
     cores: Vec<(usize, Option<Rim>, bool)>,
+    /// Scratch: the samples of the core being explored.
+    explored: Vec<usize>,
+    /// Scratch: the samples still to grow from.
+    stack: Vec<usize>,
 }
+
+/// [`Cores::core_of`] of a sample no core holds yet.
+const UNEXPLORED: u32 = u32::MAX;
+
+/// [`Cores::core_of`] of a sample of a core larger than [`MAX_CORE`].
+const LARGE: u32 = u32::MAX - 1;
 
 /// The rims of one core, merged.
 struct Rim {
@@ -447,34 +460,50 @@ impl Cores {
     /// labelled as it is), explored now if it was not; `None` for a core
     /// larger than [`MAX_CORE`].
     fn core(&mut self, at: usize, labels: &[u8], dims: [usize; 3]) -> Option<usize> {
-        const LARGE: usize = usize::MAX;
-        if let Some(&k) = self.core_of.get(&at) {
-            return (k != LARGE).then_some(k);
+        if self.core_of.is_empty() {
+            self.core_of = vec![UNEXPLORED; labels.len()];
         }
+        match self.core_of[at] {
+            UNEXPLORED => {}
+            LARGE => return None,
+            k => return Some(k as usize),
+        }
+        let k = self.cores.len() as u32;
+        let large = self.explore(at, k, labels, dims);
+        if large {
+            for &i in &self.explored {
+                self.core_of[i] = LARGE;
+            }
+            return None;
+        }
+        self.cores.push((self.explored.len(), None, true));
+        Some(k as usize)
+    }
+
+    /// Marks the core holding `at` (labelled as it is) with index `k`,
+    /// listing its samples in `explored`; stops, returning true, once it
+    /// proves larger than [`MAX_CORE`] or meets a sample of such a core.
+    fn explore(&mut self, at: usize, k: u32, labels: &[u8], dims: [usize; 3]) -> bool {
         let l = labels[at];
-        let (mut core, mut stack) = (HashSet::from([at]), vec![at]);
-        let mut large = false;
-        'grow: while let Some(i) = stack.pop() {
+        self.explored.clear();
+        self.stack.clear();
+        self.core_of[at] = k;
+        self.explored.push(at);
+        self.stack.push(at);
+        while let Some(i) = self.stack.pop() {
             for n in face_neighbours(i, dims).into_iter().flatten() {
-                if labels[n] != l || core.contains(&n) {
+                if labels[n] != l || self.core_of[n] == k {
                     continue;
                 }
-                if self.core_of.get(&n) == Some(&LARGE) || core.len() >= MAX_CORE {
-                    large = true;
-                    break 'grow;
+                if self.core_of[n] == LARGE || self.explored.len() >= MAX_CORE {
+                    return true;
                 }
-                core.insert(n);
-                stack.push(n);
+                self.core_of[n] = k;
+                self.explored.push(n);
+                self.stack.push(n);
             }
         }
-        let k = if large { LARGE } else { self.cores.len() };
-        if !large {
-            self.cores.push((core.len(), None, true));
-        }
-        for i in core {
-            self.core_of.insert(i, k);
-        }
-        (!large).then_some(k)
+        false
     }
 
     /// Each core with rims that agree on their phases: its size and rims.
