@@ -362,7 +362,11 @@ fn most_structured_split<K: Raster>(
     noise: f64,
 ) -> Option<(usize, f64)> {
     let n = phases.count.len();
-    let mut hists: Vec<Histogram> = (0..n).map(|_| Histogram::empty(low, high)).collect();
+    let ranges = cell_mean_ranges(complex, cells, n, (low, high));
+    let mut hists: Vec<Histogram> = ranges
+        .iter()
+        .map(|&(lo, hi)| Histogram::empty(lo, hi))
+        .collect();
     let mut sse = vec![0.0; n];
     let mut cell_count = vec![0usize; n];
     for c in complex.cell_ids() {
@@ -398,6 +402,30 @@ fn most_structured_split<K: Raster>(
         }
     }
     best.map(|(_, k, t)| (k, t))
+}
+
+/// Per label below `n`: the range its cells' means span, widened to hold
+/// the image's robust range `(low, high)` where they lie within it. A
+/// phase's split must see its cells at their own means: a bright object of
+/// under [`ROBUST_TAIL`](super::intensity::ROBUST_TAIL) of the samples lies
+/// beyond the robust range, and a histogram over that range counts its
+/// cells at the range's end, where splitting them off gains less than
+/// splitting the phase's noise (an 8×8 square at 255 on a 100 plateau was
+/// lost so, the two halves of the plateau swapping labels every iteration).
+fn cell_mean_ranges<K: Raster>(
+    complex: &Complex<K>,
+    cells: &[CellStats],
+    n: usize,
+    (low, high): (f64, f64),
+) -> Vec<(f64, f64)> {
+    let mut ranges = vec![(low, high); n];
+    for c in complex.cell_ids() {
+        let l = complex.label(c) as usize;
+        if let (Some(range), Some(m)) = (ranges.get_mut(l), cells[c.index()].mean()) {
+            *range = (range.0.min(m), range.1.max(m));
+        }
+    }
+    ranges
 }
 
 #[cfg(test)]
