@@ -5,8 +5,8 @@
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
     add_frame_and_phases, check_phantom, clamp_input, labels_of_samples, mean_dice,
-    run_with_progress, warn_missed_objects, GroundTruth, Job, JobTimes, Provenance, RunReport,
-    Source,
+    run_with_progress, warn_missed_objects, warn_shading, GroundTruth, Job, JobTimes, Provenance,
+    RunReport, Source,
 };
 use crate::dim::D2;
 use crate::error::{Error, Result};
@@ -487,6 +487,13 @@ pub(crate) fn segment_image_then<T>(
 
     let labels = seg.label_image();
     warn_missed_objects(&seg, &view, &labels, &mut report);
+    warn_shading(
+        &seg,
+        &view,
+        &labels,
+        intensity.map_or(1.0, |m| m.scale()),
+        &mut report,
+    );
     let (points, tris, phase) = overlay_arrays(&seg);
     let truth_dice = provenance
         .truth

@@ -6,8 +6,8 @@
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
     add_frame_and_phases, check_phantom, clamp_input, labels_of_samples, mean_dice,
-    run_with_progress, warn_missed_objects, GroundTruth, Job, JobTimes, Provenance, RunReport,
-    Source,
+    run_with_progress, warn_missed_objects, warn_shading, GroundTruth, Job, JobTimes, Provenance,
+    RunReport, Source,
 };
 use crate::dim::D3;
 use crate::error::{Error, Result};
@@ -343,6 +343,13 @@ pub(crate) fn segment_volume_then<T>(
 
     let labels = seg.label_image();
     warn_missed_objects(&seg, &view, &labels, &mut report);
+    warn_shading(
+        &seg,
+        &view,
+        &labels,
+        volume.intensity().map_or(1.0, |m| m.scale()),
+        &mut report,
+    );
     let order = seg.phase_order();
     let complex = seg.complex();
     let truth_dice = provenance

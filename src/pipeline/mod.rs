@@ -32,6 +32,7 @@ use crate::segment::measurements::Measurements;
 use crate::segment::missed_objects::{missed_objects, Noise};
 use crate::segment::outliers::{clamp_outliers, Outliers};
 use crate::segment::params::MAX_PHASES;
+use crate::segment::shading::{phase_trends, FitNoise};
 use crate::segment::ImageView;
 use crate::segment::{Raster, SegmentParams, SegmentReport, Segmentation};
 use crate::segmented::{Outputs, Segmented};
@@ -302,6 +303,38 @@ pub(crate) fn warn_missed_objects<K: Raster>(
         .warnings
         .extend(found.iter().map(|m| m.warning(three_d)));
     report.missed_objects = Some(found);
+}
+
+/// Adds to `report` the trend of intensity fitted inside each phase
+/// ([`phase_trends`]: uneven illumination, a bias field, vignetting) and a
+/// warning for each phase whose trend spans a large share of the gap to
+/// the nearest other phase's mean; `scale` turns a difference of loaded
+/// values into the file's units. `labels` are the output labels of `seg`
+/// over `image`. Only where the result answers for the whole image
+/// ([`SegmentParams::claims_whole_image`]).
+pub(crate) fn warn_shading<K: Raster>(
+    seg: &Segmentation<'_, K>,
+    image: &ImageView<'_>,
+    labels: &[u8],
+    scale: f64,
+    report: &mut SegmentReport,
+) {
+    if !seg.params().claims_whole_image() {
+        return;
+    }
+    let means = ordered_means(&seg.phase_order(), report);
+    let noise = FitNoise {
+        correlation: report.intensity.noise_correlation,
+    };
+    let trends = phase_trends(image, labels, &means, noise, scale);
+    let three_d = image.dims[2] > 1;
+    report.warnings.extend(
+        trends
+            .iter()
+            .filter(|t| t.warned)
+            .map(|t| t.warning(three_d)),
+    );
+    report.shading = Some(trends);
 }
 
 /// The input's samples `data` (on the grid `dims`) with their outliers clamped

@@ -26,6 +26,7 @@ use super::reseed::{
     vestiges, LostPhase,
 };
 use super::reseed_trial::{ReseedTrial, RunProgress};
+use super::shading::PhaseTrend;
 use super::smoothing::force_smoothing;
 use super::thresholds::smallest_class_gap;
 use crate::complex::{Complex, Label};
@@ -244,6 +245,10 @@ pub struct SegmentReport {
     /// rasterises them; see [`missed_objects`](super::missed_objects));
     /// `None` when not looked for.
     pub missed_objects: Option<Vec<MissedObjects>>,
+    /// The smooth trend of intensity fitted inside each phase (uneven
+    /// illumination, a bias field; filled by the pipeline, see
+    /// [`shading`](super::shading)); `None` when not looked for.
+    pub shading: Option<Vec<PhaseTrend>>,
 }
 
 /// A segmentation in progress: the complex, the image, the models of the
@@ -1700,6 +1705,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             sizes: self.adaptive.as_ref().map(AdaptiveSizing::sizes),
             coarse_pass: self.coarse_pass.clone(),
             missed_objects: None,
+            shading: None,
         }
     }
 

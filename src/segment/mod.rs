@@ -29,6 +29,8 @@
 //! - [`relaxed_length`]: the length a staircase border of small cells
 //!   relaxes to;
 //! - [`reseed`]: phases that empty or duplicate another, found and re-seeded;
+//! - [`shading`]: a smooth trend of intensity inside the phases (uneven
+//!   illumination, a bias field), fitted after a run and reported;
 //! - [`model`]: the extension points ([`ForceTerm`], [`LabelRule`],
 //!   [`Initialiser`], [`Models`]) through which a user supplies the evolution;
 //! - [`models`]: the paper's terms and rules written against them, and
@@ -80,6 +82,7 @@ pub mod raster;
 pub mod relaxed_length;
 pub mod reseed;
 pub mod reseed_trial;
+pub mod shading;
 pub mod smoothing;
 mod step_gain;
 pub mod thresholds;

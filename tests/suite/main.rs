@@ -23,5 +23,6 @@ mod report_units;
 mod reseed;
 mod seg3d;
 mod segment2d;
+mod shading;
 mod sizing;
 mod stopping3d;
