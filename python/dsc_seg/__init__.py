@@ -32,7 +32,8 @@ __version__ = _native.__version__
 class SegmentationWarning(UserWarning):
     """What the command line prints as ``warning: ...``: a phase lost or
     absorbed by its neighbours, a run stopped at the iteration cap, the
-    choice of ``phases="auto"``, noise that comes in blobs. :func:`segment`
+    choice of ``phases="auto"``, noise that comes in blobs, a smooth trend of
+    intensity inside a phase (uneven illumination). :func:`segment`
     issues one per warning of the run, so a result with a lost phase does not
     pass for a good one in a notebook; ``warnings.simplefilter("error",
     dsc_seg.SegmentationWarning)`` makes them errors, and
