@@ -410,3 +410,42 @@ fn a_rare_bright_phase_beyond_the_robust_range_is_reseeded() {
         );
     }
 }
+
+/// Asked for four phases, an image of two (halves of 0 and 0.4, noise σ
+/// 0.04, as 8 bits) can end with two phases dividing the 0.4 plateau by
+/// noise, each of their components flipping into the other every iteration:
+/// such a run went on to the iteration cap. It now stops once the labels
+/// have swapped for a few iterations, and says why.
+#[test]
+fn a_run_whose_labels_swap_stops_and_says_so() {
+    use dsc_seg::segment::StopReason;
+    let (w, h) = (256, 256);
+    let mut swapped = 0;
+    for seed in 1..=4 {
+        let mut image: Vec<f32> = (0..w * h)
+            .map(|i| if i % w >= w / 2 { 0.4 } else { 0.0 })
+            .collect();
+        add_gaussian_noise(&mut image, 0.04, seed);
+        for v in &mut image {
+            *v = (v.clamp(0.0, 1.0) * 255.0).round() / 255.0;
+        }
+        let view = ImageView::new_2d(w, h, &image).unwrap();
+        let mut seg = Segmentation2::new(view, SegmentParams::new(4)).unwrap();
+        let report = seg.run(|_| {});
+        assert_ne!(report.stop_reason, StopReason::MaxIterations, "seed {seed}");
+        if report.stop_reason == StopReason::SwappingLabels {
+            swapped += 1;
+            assert!(
+                report.iterations < 100,
+                "seed {seed}: {}",
+                report.iterations
+            );
+            assert!(
+                report.warnings.iter().any(|w| w.contains("labels swapped")),
+                "seed {seed}: {:?}",
+                report.warnings
+            );
+        }
+    }
+    assert!(swapped > 0, "no run swapped its labels");
+}
