@@ -150,7 +150,8 @@ pub struct Row {
     pub phases: Option<usize>,
     /// Iterations run.
     pub iterations: Option<usize>,
-    /// Whether the run converged before the iteration cap.
+    /// Whether the run converged (before the iteration cap; its warnings say
+    /// why one did not).
     pub converged: Option<bool>,
     /// Wall seconds of load, segmentation and writing.
     pub seconds: Option<f64>,
@@ -688,7 +689,7 @@ fn describe(row: &Row) -> String {
                 if row.converged == Some(true) {
                     "converged"
                 } else {
-                    "stopped at the iteration cap"
+                    "stopped before converging"
                 },
                 row.iterations.unwrap_or(0),
                 row.seconds.unwrap_or(0.0)

@@ -410,12 +410,13 @@ fn print_earlier_outputs(names: &[&str], out: &std::path::Path) {
 
 /// One line on stderr: how the run ended and where the outputs are.
 fn print_summary(report: &dsc_seg::segment::SegmentReport, cells: &str, out: &std::path::Path) {
-    let ending = if report.converged && !report.warnings.is_empty() {
-        "converged with warnings (above)"
-    } else if report.converged {
-        "converged"
-    } else {
-        "stopped at the iteration cap"
+    use dsc_seg::segment::StopReason;
+    let ending = match report.stop_reason {
+        StopReason::Converged if !report.warnings.is_empty() => "converged with warnings (above)",
+        StopReason::Converged => "converged",
+        StopReason::MaxIterations => "stopped at the iteration cap",
+        StopReason::SwappingLabels => "stopped with its labels swapping (above)",
+        StopReason::Stopped => "stopped",
     };
     eprintln!(
         "{ending} after {} iterations ({:.2} s), {} {cells}; outputs in {}",

@@ -61,7 +61,8 @@ const ADAPTIVE_CALM_FLIPS: f64 = 0.005;
 /// holds) can trade their cells every iteration, each component judging its
 /// flip against the other's labels as they are, up to the iteration cap (a
 /// 256² image of two halves asked for four phases: 1 600 of 3 200 cells at
-/// every one of 500 iterations). On the README's images, the hard phantoms,
+/// every one of 500 iterations), and so can the few cells over an image of
+/// a few pixels (a 2×2 checkerboard). On the README's images, the hard phantoms,
 /// the real images, the 3D phantoms and flat noise no run relabelled more
 /// than 3.3 % of its cells six iterations in a row.
 pub const SWAP_ITERATIONS: usize = 6;
@@ -1546,10 +1547,11 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     fn swap_warning(&self) -> String {
         let last = self.history.last().map_or((0, 0), |r| (r.flips, r.cells));
         format!(
-            "the run stopped after {} iterations because its labels swapped instead of settling \
-             ({} of {} cells relabelled in each of the last {SWAP_ITERATIONS}): two phases divide \
-             one region of the image between them by noise, so the image may hold fewer phases \
-             than the {} asked for (--phases auto chooses the count)",
+            "the run stopped after {} iterations because its labels swapped between states \
+             instead of settling ({} of {} cells relabelled in each of the last \
+             {SWAP_ITERATIONS}): where the image holds fewer phases than the {} asked for, two \
+             phases divide one region between them by noise (--phases auto chooses the count); \
+             on an image of a few pixels, its regions are smaller than the mesh's cells",
             self.history.len(),
             last.0,
             last.1,

@@ -274,3 +274,42 @@ fn phases_auto_on_noise_warns_once() {
     );
     assert_eq!(report["warnings"][0], printed[0]["warning: ".len()..]);
 }
+
+/// A 2×2 checkerboard: every cell of its mesh flips at every iteration,
+/// which ran to the iteration cap. The run stops once its labels have
+/// swapped for a few iterations, and the last line says so rather than
+/// speak of the cap.
+#[test]
+fn a_run_whose_labels_swap_says_so_in_its_last_line() {
+    let d = tmp();
+    let image = d.path().join("checker.png");
+    image::GrayImage::from_raw(2, 2, vec![0, 255, 255, 0])
+        .unwrap()
+        .save(&image)
+        .unwrap();
+    let out = d.path().join("o");
+    // (without --quiet: the last line is the summary)
+    let o = bin()
+        .args([
+            "segment",
+            image.to_str().unwrap(),
+            "--outputs",
+            "report",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stderr(&o);
+    assert!(text.contains("labels swapped between states"), "{text}");
+    let last = text.lines().last().unwrap_or_default();
+    assert!(
+        last.starts_with("stopped with its labels swapping"),
+        "{last}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["converged"], false);
+    assert_eq!(report["segmentation"]["stop_reason"], "swapping_labels");
+}
