@@ -47,8 +47,13 @@ def read_input(path: Path) -> tuple[np.ndarray, dict[str, Any]]:
 
         with tifffile.TiffFile(path) as tif:
             refuse_time_series(tif)
+            pixels = ome_pixels(tif)
+            if pixels is not None:
+                refuse_ome_channels_and_times(pixels, tif.pages[0].samplesperpixel)
             array = tif.asarray()
-            spacing, unit = tiff_spacing(tif, array.ndim)
+            spacing, unit = ome_spacing(pixels, array.ndim) if pixels is not None else (None, "")
+            if spacing is None:
+                spacing, unit = tiff_spacing(tif, array.ndim)
     else:
         from PIL import Image
 
@@ -77,6 +82,53 @@ def refuse_time_series(tif) -> None:
             f"an ImageJ time series of {frames} time points, not the slices of a volume: "
             "segment each time point as an image"
         )
+
+
+#: OME's length units (``UnitsLength``) in micrometres, OME's default unit.
+OME_MICROMETRES = {"nm": 1e-3, "µm": 1.0, "μm": 1.0, "um": 1.0, "mm": 1e3, "cm": 1e4, "m": 1e6}
+
+
+def ome_pixels(tif):
+    """The first ``Pixels`` element of an OME-TIFF's OME-XML (its first
+    series, the one ``asarray`` reads), or None for another TIFF."""
+    import xml.etree.ElementTree as ElementTree
+
+    if not tif.is_ome or not tif.ome_metadata:
+        return None
+    root = ElementTree.fromstring(tif.ome_metadata)
+    return next((e for e in root.iter() if e.tag.split("}")[-1] == "Pixels"), None)
+
+
+def refuse_ome_channels_and_times(pixels, samples_per_pixel: int) -> None:
+    """Refuses an OME-TIFF of several channels or time points, as ``dsc-seg``
+    does: read as an array they are axes of their own, not a volume's (an
+    RGB page counts as one channel)."""
+    channels = int(pixels.get("SizeC", "1")) // max(samples_per_pixel, 1)
+    times = int(pixels.get("SizeT", "1"))
+    if channels > 1 or times > 1:
+        raise ValueError(
+            f"an OME-TIFF of {channels} channels × {times} time points: "
+            "save one channel at one time point as a file of its own and segment that"
+        )
+
+
+def ome_spacing(pixels, ndim: int) -> tuple[tuple[float, ...] | None, str]:
+    """The pixel size (x, y), or voxel size (x, y, z), in micrometres, that
+    an OME-TIFF's ``PhysicalSizeX``/``Y``/``Z`` give (each in its unit,
+    micrometres when none is named; z 1 µm without ``PhysicalSizeZ``), as
+    ``dsc-seg`` reads them ahead of the resolution tags; None without x and y."""
+
+    def size(axis: str) -> float | None:
+        value, unit = pixels.get(f"PhysicalSize{axis}"), pixels.get(f"PhysicalSize{axis}Unit", "µm")
+        if value is None or unit not in OME_MICROMETRES or float(value) <= 0:
+            return None
+        return float(value) * OME_MICROMETRES[unit]
+
+    x, y = size("X"), size("Y")
+    if x is None and y is None:
+        return None, "px"
+    x, y = x or y, y or x
+    return (x, y, size("Z") or 1.0)[:ndim], "um"
 
 
 def gray_if_gray(array: np.ndarray) -> np.ndarray:

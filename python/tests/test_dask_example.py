@@ -174,3 +174,35 @@ def test_a_palette_or_gray_alpha_png_is_read_as_its_gray_values(tmp_path, cli):
         expected = np.asarray(Image.open(tmp_path / name / "labels.png"))
         labels = np.asarray(Image.open(tmp_path / "out" / name / "labels.png"))
         assert np.array_equal(labels, expected), name
+
+
+def test_an_ome_tiffs_voxel_size_is_read_as_the_cli_reads_it(tmp_path, cli):
+    """An OME-TIFF of 0.5 × 0.5 × 2 µm voxels (PhysicalSize, no resolution
+    tags) is segmented in those voxels, with the command line's labels; one
+    of two channels is refused, as the command line refuses it."""
+    example = load_example()
+    volume, _ = dsc_seg.phantom("two_balls", size=20, noise=0.1, seed=1)
+    stack = tmp_path / "ome.ome.tif"
+    sizes = {"PhysicalSizeX": 0.5, "PhysicalSizeY": 0.5, "PhysicalSizeZ": 2.0}
+    tifffile.imwrite(stack, volume, ome=True, metadata={"axes": "ZYX", **sizes})
+    row = example.segment_file(
+        str(stack), str(tmp_path / "out"), 2, "labels,report", {"max_iterations": 15}
+    )
+    assert row["status"] == "done", row
+    report = json.loads((tmp_path / "out" / "ome.ome" / "report.json").read_text())
+    assert report["frame"]["spacing"] == [0.5, 0.5, 2.0]
+    cli("segment3d", stack, "--phases", 2, "--max-iterations", 15, "--outputs", "labels,report",
+        "--quiet", "--out", tmp_path / "cli")
+    cli_report = json.loads((tmp_path / "cli" / "report.json").read_text())
+    assert cli_report["frame"]["spacing"] == [0.5, 0.5, 2.0]
+    assert report["frame"]["unit"] == cli_report["frame"]["unit"]
+    assert np.array_equal(
+        tifffile.imread(tmp_path / "out" / "ome.ome" / "labels.tif"),
+        tifffile.imread(tmp_path / "cli" / "labels.tif"),
+    )
+
+    channels = tmp_path / "channels.ome.tif"
+    tifffile.imwrite(channels, np.stack([volume, volume]), ome=True,
+                     metadata={"axes": "CZYX", **sizes})
+    row = example.segment_file(str(channels), str(tmp_path / "out"), 2, "report", {})
+    assert row["status"] == "error" and "2 channels" in row["error"], row
