@@ -176,7 +176,10 @@ pub fn choose_phases<K: Raster>(
         let mut seg = Segmentation::<K>::new(image, params(n))?;
         let report = seg.run(|_| {});
         let thinnest = thinnest_band(seg.complex(), seg.phases());
-        let lost = seg.lost_phases();
+        // (a vestige, a phase of fewer samples than one cell holds, is no
+        // region either: the run's own end-of-run check says so too)
+        let mut lost = seg.lost_phases();
+        lost.extend(seg.vestige_phases(&lost));
         let reason = if let Some(l) = lost.first() {
             Some(l.describe(&seg.phase_order()))
         } else if thinnest < MIN_THICKNESS {

@@ -56,15 +56,15 @@ const START_GROWTH: usize = 10;
 const ADAPTIVE_CALM_FLIPS: f64 = 0.005;
 
 /// A run whose last [`SWAP_ITERATIONS`] iterations each relabelled more than
-/// [`SWAP_SHARE`] of the cells is swapping labels and stops: two phases that
+/// [`SWAP_SHARE`] of the cells, without a new low of the energy, is swapping
+/// labels and stops: two phases that
 /// divide one region of the image by noise (a phase more than the image
 /// holds) can trade their cells every iteration, each component judging its
 /// flip against the other's labels as they are, up to the iteration cap (a
 /// 256² image of two halves asked for four phases: 1 600 of 3 200 cells at
 /// every one of 500 iterations), and so can the few cells over an image of
-/// a few pixels (a 2×2 checkerboard). On the README's images, the hard phantoms,
-/// the real images, the 3D phantoms and flat noise no run relabelled more
-/// than 3.3 % of its cells six iterations in a row.
+/// a few pixels (a 2×2 checkerboard). A run from a poor start relabels as
+/// many cells in its first iterations, but its energy falls meanwhile.
 pub const SWAP_ITERATIONS: usize = 6;
 
 /// See [`SWAP_ITERATIONS`].
@@ -1169,7 +1169,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     /// a vestige of a phase has one phase fewer than its label values say
     /// (seen on a block of a real brain MRI, where one of four phases ended as one voxel), so
     /// the run warns rather than pass it for one with every phase.
-    fn vestige_phases(&self, listed: &[LostPhase]) -> Vec<LostPhase> {
+    pub(crate) fn vestige_phases(&self, listed: &[LostPhase]) -> Vec<LostPhase> {
         let voxel: f64 = self.image.spacing[..K::N].iter().product();
         let cell = K::regular_measure(self.dsc.edge_length) / voxel;
         vestiges(&self.phases.count, cell, listed)
@@ -1560,10 +1560,13 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     }
 
     /// Whether each of the last [`SWAP_ITERATIONS`] iterations relabelled
-    /// more than [`SWAP_SHARE`] of the cells: the labels swap between states
-    /// rather than settle, and [`run`](Self::run) stops.
+    /// more than [`SWAP_SHARE`] of the cells while the energy reached no
+    /// new low: the labels swap between states rather than settle, and
+    /// [`run`](Self::run) stops. (A run from a poor start relabels as much
+    /// in its first iterations, but its energy falls.)
     pub fn labels_swapping(&self) -> bool {
         self.history.len() >= SWAP_ITERATIONS
+            && self.since_new_low >= SWAP_ITERATIONS
             && self.history[self.history.len() - SWAP_ITERATIONS..]
                 .iter()
                 .all(|r| r.flips as f64 > SWAP_SHARE * r.cells as f64)

@@ -449,3 +449,25 @@ fn a_run_whose_labels_swap_stops_and_says_so() {
     }
     assert!(swapped > 0, "no run swapped its labels");
 }
+
+/// A run from a poor start relabels a third of its cells in each of its
+/// first iterations while its energy falls (four phases of close means
+/// under σ 0.25, noise seed 2): it is settling, not swapping, and runs on
+/// to convergence.
+#[test]
+fn a_run_relabelling_much_while_its_energy_falls_is_not_stopped() {
+    use dsc_seg::segment::StopReason;
+    let ph = Phantom2Kind::FourClose.generate(256, 0.25, 2);
+    let view = ImageView::new_2d(ph.width, ph.height, &ph.image).unwrap();
+    let mut seg = Segmentation2::new(view, SegmentParams::new(4)).unwrap();
+    let report = seg.run(|_| {});
+    let early = &report.history[..6];
+    assert!(
+        early.iter().all(|r| r.flips * 5 > r.cells),
+        "the start is no longer poor: {:?}",
+        early.iter().map(|r| r.flips).collect::<Vec<_>>()
+    );
+    assert_eq!(report.stop_reason, StopReason::Converged);
+    let dice = mean_dice(&seg.label_image(), &ph.truth, 4);
+    assert!(dice > 0.85, "Dice {dice}");
+}
