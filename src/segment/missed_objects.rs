@@ -186,12 +186,8 @@ pub fn missed_objects(
     means: &[Option<f64>],
     noise: Noise,
 ) -> Vec<MissedObjects> {
-    let present: Vec<(u8, f64)> = means
-        .iter()
-        .enumerate()
-        .filter_map(|(l, m)| m.map(|m| (l as u8, m)))
-        .collect();
-    let rho = noise.correlation.unwrap_or(0.0).clamp(0.0, MAX_CORRELATION);
+    let present = present_means(means);
+    let (rho, independent) = correlation_and_share(noise.correlation);
     if present.len() < 2 || labels.len() != image.data.len() || smoothed.len() != labels.len() {
         return Vec::new();
     }
@@ -201,7 +197,6 @@ pub fn missed_objects(
     if !sigma.is_finite() || sigma <= 0.0 {
         return Vec::new();
     }
-    let independent = (1.0 - rho) / (1.0 + rho);
     let smoothed_sigma = sigma * smoothing_attenuation(image.dims);
     let class: Vec<u8> = smoothed
         .iter()
@@ -252,6 +247,24 @@ pub fn missed_objects(
     }
     found.sort_by_key(|m| (m.phase, m.within, m.labelled > 0));
     found
+}
+
+/// The labels whose final mean is known, with their means (`means` holds
+/// one per output label, `None` for an empty phase).
+pub(crate) fn present_means(means: &[Option<f64>]) -> Vec<(u8, f64)> {
+    means
+        .iter()
+        .enumerate()
+        .filter_map(|(l, m)| m.map(|m| (l as u8, m)))
+        .collect()
+}
+
+/// The noise's neighbour correlation `ρ` as the checks take it (none: 0; at
+/// most [`MAX_CORRELATION`]) and the share of a region's samples that count
+/// as independent, `(1 − ρ)/(1 + ρ)`.
+pub(crate) fn correlation_and_share(correlation: Option<f64>) -> (f64, f64) {
+    let rho = correlation.unwrap_or(0.0).clamp(0.0, MAX_CORRELATION);
+    (rho, (1.0 - rho) / (1.0 + rho))
 }
 
 /// Whether `region`, of at least [`MIN_SAMPLES`], has an unsmoothed mean

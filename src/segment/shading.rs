@@ -33,7 +33,7 @@
 //! well as it follows light.
 
 use super::image::ImageView;
-use super::missed_objects::MAX_CORRELATION;
+use super::missed_objects::{correlation_and_share, present_means};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
@@ -143,7 +143,7 @@ fn significant(v: f64) -> String {
 #[derive(Clone, Copy, Debug)]
 pub struct FitNoise {
     /// Neighbour correlation of the image's noise (`None`: taken as 0; at
-    /// most [`MAX_CORRELATION`]),
+    /// most [`MAX_CORRELATION`](super::missed_objects::MAX_CORRELATION)),
     /// which thins the fit's independent samples.
     pub correlation: Option<f64>,
 }
@@ -161,11 +161,7 @@ pub fn phase_trends(
     noise: FitNoise,
     scale: f64,
 ) -> Vec<PhaseTrend> {
-    let present: Vec<(u8, f64)> = means
-        .iter()
-        .enumerate()
-        .filter_map(|(l, m)| m.map(|m| (l as u8, m)))
-        .collect();
+    let present = present_means(means);
     if present.len() < 2 || labels.len() != image.data.len() {
         return Vec::new();
     }
@@ -181,8 +177,7 @@ pub fn phase_trends(
             });
         }
     }
-    let rho = noise.correlation.unwrap_or(0.0).clamp(0.0, MAX_CORRELATION);
-    let independent = (1.0 - rho) / (1.0 + rho);
+    let (_, independent) = correlation_and_share(noise.correlation);
     let mut trends = Vec::new();
     for &(phase, mean) in &present {
         let samples = &per_phase[phase as usize];
