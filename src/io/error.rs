@@ -42,6 +42,16 @@ pub enum IoError {
         /// What the pages are and what to do instead.
         reason: String,
     },
+    /// A channel or time point of a TIFF's pages (`--channel`,
+    /// `--time-point`) that the file does not have, or none chosen along an
+    /// axis of several once one is chosen.
+    #[error("{path}: {reason}")]
+    NotInFile {
+        /// The offending path.
+        path: PathBuf,
+        /// What was chosen, what the file holds.
+        reason: String,
+    },
     /// A channel was asked for that the image does not have.
     #[error("{path} has no channel {channel}: it has {channels} (0 to {last})", last = channels - 1)]
     NoChannel {

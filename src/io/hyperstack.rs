@@ -19,6 +19,11 @@
 //! `imwrite(..., imagej=True)` of a 3-D array without axes declares
 //! `channels=N` for what its writer meant as N slices. OME-XML names its
 //! axes, so there more than one channel or time point is refused.
+//!
+//! One channel at one time point can be chosen instead (`--channel`,
+//! `--time-point`, see [`super::selection`]); [`Hyperstack::page`] says
+//! which page holds each of its slices, from the order the pages run
+//! through the axes ([`PageOrder`]).
 
 use super::ome::OmeLayout;
 
@@ -34,6 +39,53 @@ pub struct Hyperstack {
     pub frames: usize,
     /// Which description declares them.
     pub metadata: Metadata,
+    /// How the pages run through the axes; `None` when the OME-XML names
+    /// no valid `DimensionOrder` (the pages can then be told apart only
+    /// when at most one axis has more than one entry).
+    pub order: Option<PageOrder>,
+}
+
+/// An axis of a hyperstack's pages besides the plane's own two.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Axis {
+    /// Z slices.
+    Z,
+    /// Channels.
+    C,
+    /// Time points.
+    T,
+}
+
+/// The order in which a hyperstack's pages run through its axes, the
+/// fastest first: page `p` of ImageJ's `[C, Z, T]` order is channel
+/// `p mod C` of slice `(p div C) mod Z` at time point `p div (C·Z)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PageOrder(pub [Axis; 3]);
+
+impl PageOrder {
+    /// ImageJ's hyperstacks: channels fastest, then slices, then time points.
+    pub const IMAGEJ: PageOrder = PageOrder([Axis::C, Axis::Z, Axis::T]);
+
+    /// An OME `DimensionOrder` (`XYZCT`, `XYCZT`, ...: `X`, `Y`, then Z, C
+    /// and T in the order the pages run through them); `None` for anything
+    /// else.
+    pub fn from_dimension_order(order: &str) -> Option<Self> {
+        let rest = order.trim().strip_prefix("XY")?;
+        let axes: Vec<Axis> = rest
+            .chars()
+            .map(|a| match a {
+                'Z' => Some(Axis::Z),
+                'C' => Some(Axis::C),
+                'T' => Some(Axis::T),
+                _ => None,
+            })
+            .collect::<Option<_>>()?;
+        let all = [Axis::Z, Axis::C, Axis::T];
+        match axes[..] {
+            [a, b, c] if all.iter().all(|x| [a, b, c].contains(x)) => Some(PageOrder([a, b, c])),
+            _ => None,
+        }
+    }
 }
 
 /// The description that declares a [`Hyperstack`].
@@ -51,6 +103,14 @@ impl Hyperstack {
     /// or more than one time point (one run of slices or of channels is read
     /// as a stack).
     pub fn from_description(description: &str) -> Option<Self> {
+        Self::declared_by_imagej(description)
+            .filter(|stack| stack.is_interleaved() || stack.is_time_series())
+    }
+
+    /// The extents an `ImageJ=` description declares, whatever they are
+    /// (a run of slices, or of channels, too); `None` for any other
+    /// description.
+    pub fn declared_by_imagej(description: &str) -> Option<Self> {
         if !description.starts_with("ImageJ=") {
             return None;
         }
@@ -62,18 +122,50 @@ impl Hyperstack {
                 .filter(|&n| n > 0)
                 .unwrap_or(1)
         };
-        let stack = Hyperstack {
+        Some(Hyperstack {
             channels: count("channels="),
             slices: count("slices="),
             frames: count("frames="),
             metadata: Metadata::ImageJ,
-        };
-        let interleaved = [stack.channels, stack.slices, stack.frames]
+            order: Some(PageOrder::IMAGEJ),
+        })
+    }
+
+    /// Whether more than one of the axes has more than one entry.
+    fn is_interleaved(&self) -> bool {
+        [self.channels, self.slices, self.frames]
             .iter()
             .filter(|&&n| n > 1)
             .count()
-            > 1;
-        (interleaved || stack.is_time_series()).then_some(stack)
+            > 1
+    }
+
+    /// How many pages the extents take.
+    pub fn pages(&self) -> usize {
+        self.channels * self.slices * self.frames
+    }
+
+    /// The page holding slice `z` of channel `c` at time point `t` (each
+    /// within its extent); `None` when the page order is unknown and more
+    /// than one axis has more than one entry.
+    pub fn page(&self, z: usize, c: usize, t: usize) -> Option<usize> {
+        // With one axis of several entries, any order runs through it alone.
+        let order = match self.order {
+            Some(order) => order,
+            None if !self.is_interleaved() => PageOrder::IMAGEJ,
+            None => return None,
+        };
+        let (mut page, mut stride) = (0, 1);
+        for axis in order.0 {
+            let (index, extent) = match axis {
+                Axis::Z => (z, self.slices),
+                Axis::C => (c, self.channels),
+                Axis::T => (t, self.frames),
+            };
+            page += index * stride;
+            stride *= extent;
+        }
+        Some(page)
     }
 
     /// Whether the pages are time points of one plane (no slices, one channel).
@@ -100,36 +192,60 @@ impl Hyperstack {
     pub fn refusal(&self) -> String {
         match (self.metadata, self.is_time_series()) {
             (Metadata::ImageJ, true) => format!(
-                "an ImageJ time series of {}, not the slices of a volume: segment each \
-                 time point as an image with `dsc-seg segment` (Fiji: Image › Stacks › \
-                 Stack to Images, then save them to a folder), or, if the pages are Z \
+                "an ImageJ time series of {}, not the slices of a volume: segment one time \
+                 point as an image with `dsc-seg segment` and {}, or, if the pages are Z \
                  slices, say so (Fiji: Image › Properties…, {} slices, 1 frame)",
                 counted(self.frames, "time point"),
+                self.options_to_choose(),
                 self.frames
             ),
             (Metadata::OmeXml, true) => format!(
                 "an OME-TIFF time series of {} (OME-XML), not the slices of a volume: \
-                 segment each time point as an image with `dsc-seg segment` (Fiji: Image › \
-                 Stacks › Stack to Images, then save them to a folder)",
-                counted(self.frames, "time point")
+                 segment one time point as an image with `dsc-seg segment` and {}",
+                counted(self.frames, "time point"),
+                self.options_to_choose()
             ),
-            (Metadata::ImageJ, false) => format!(
-                "an ImageJ hyperstack of {}; its pages are not one volume: save one channel \
-                 at one time point (Fiji: Image › Duplicate…) and segment that",
-                self.extents()
-            ),
-            (Metadata::OmeXml, false) => format!(
-                "an OME-TIFF of {} (OME-XML); its pages are not one volume: save one channel \
-                 at one time point as a file of its own (Fiji: Image › Duplicate…; tifffile: \
-                 index `imread(file)` along the axes `TiffFile(file).series[0].axes` names, \
-                 then `imwrite(..., ome=True)`) and segment that",
-                self.extents()
+            (metadata, false) => format!(
+                "{} of {}{}; its pages are not one volume: choose one channel at one time \
+                 point with {}",
+                match metadata {
+                    Metadata::ImageJ => "an ImageJ hyperstack",
+                    Metadata::OmeXml => "an OME-TIFF",
+                },
+                self.extents(),
+                match metadata {
+                    Metadata::ImageJ => "",
+                    Metadata::OmeXml => " (OME-XML)",
+                },
+                self.options_to_choose()
             ),
         }
     }
 
+    /// The options that choose one channel at one time point of these
+    /// extents and their ranges, naming only the axes of more than one
+    /// entry: "--channel C --time-point T (0-based: C from 0 to 1, T from 0
+    /// to 4)".
+    pub fn options_to_choose(&self) -> String {
+        let axes: Vec<(String, String)> = [
+            (self.channels, "channel", "C"),
+            (self.frames, "time-point", "T"),
+        ]
+        .into_iter()
+        .filter(|&(n, _, _)| n > 1)
+        .map(|(n, name, letter)| {
+            (
+                format!("--{name} {letter}"),
+                format!("{letter} from 0 to {}", n - 1),
+            )
+        })
+        .collect();
+        let (options, ranges): (Vec<String>, Vec<String>) = axes.into_iter().unzip();
+        format!("{} (0-based: {})", options.join(" "), ranges.join(", "))
+    }
+
     /// "2 channels × 30 slices × 1 time point".
-    fn extents(&self) -> String {
+    pub fn extents(&self) -> String {
         format!(
             "{} × {} × {}",
             counted(self.channels, "channel"),
@@ -173,6 +289,52 @@ mod tests {
         let h = Hyperstack::from_description(two_channels).unwrap();
         assert!(!h.is_time_series());
         assert!(h.refusal().contains("2 channels × 1 slice × 5 time points"));
+        assert!(
+            h.refusal()
+                .contains("--channel C --time-point T (0-based: C from 0 to 1, T from 0 to 4)"),
+            "{}",
+            h.refusal()
+        );
+        assert!(series
+            .refusal()
+            .contains("`dsc-seg segment` and --time-point T (0-based: T from 0 to 4)"));
+    }
+
+    /// ImageJ's pages run through channels, then slices, then time points.
+    #[test]
+    fn imagej_pages_run_through_channels_first() {
+        let d = "ImageJ=1.11a\nimages=24\nchannels=2\nslices=3\nframes=4\n";
+        let h = Hyperstack::from_description(d).unwrap();
+        assert_eq!(h.pages(), 24);
+        assert_eq!(h.page(0, 1, 0), Some(1));
+        assert_eq!(h.page(2, 0, 0), Some(4));
+        assert_eq!(h.page(1, 1, 3), Some(3 * 6 + 2 + 1));
+    }
+
+    /// OME's `DimensionOrder` names the axes from the fastest.
+    #[test]
+    fn dimension_orders_name_the_fastest_axis_first() {
+        let order = |s: &str| PageOrder::from_dimension_order(s);
+        assert_eq!(order("XYZCT"), Some(PageOrder([Axis::Z, Axis::C, Axis::T])));
+        assert_eq!(order("XYTCZ"), Some(PageOrder([Axis::T, Axis::C, Axis::Z])));
+        for bad in ["", "XYZC", "XYZZT", "YXZCT", "XYZCTT"] {
+            assert_eq!(order(bad), None, "{bad}");
+        }
+        let mut h = Hyperstack {
+            channels: 2,
+            slices: 3,
+            frames: 4,
+            metadata: Metadata::OmeXml,
+            order: order("XYZCT"),
+        };
+        assert_eq!(h.page(2, 1, 3), Some(2 + 3 + 3 * 6));
+        h.order = order("XYCZT");
+        assert_eq!(h.page(2, 1, 3), Some(1 + 2 * 2 + 3 * 6));
+        h.order = None;
+        assert_eq!(h.page(2, 1, 3), None);
+        h.frames = 1;
+        h.channels = 1;
+        assert_eq!(h.page(2, 0, 0), Some(2));
     }
 
     #[test]

@@ -42,6 +42,7 @@ use serde::Serialize;
 use super::atomic::write_atomic;
 use super::error::{io_reason, IoError, Result};
 use super::frame::Frame;
+use super::selection::Selection;
 
 /// Rec. 709 luminance weights for R, G, B.
 const REC709: [f32; 3] = [0.2126, 0.7152, 0.0722];
@@ -98,6 +99,9 @@ pub struct Image2 {
     unit: Option<String>,
     placement: Option<Box<Placement>>,
     transparency: Transparency,
+    /// The channel and time point of a TIFF's pages this image is (see
+    /// [`Image2::selection`]).
+    selection: Selection,
 }
 
 /// Where a NIfTI slice sits in the world, and its header, the template of
@@ -194,6 +198,7 @@ impl Image2 {
             unit: None,
             placement: None,
             transparency: Transparency::default(),
+            selection: Selection::default(),
         }
     }
 
@@ -216,6 +221,7 @@ impl Image2 {
             unit: None,
             placement: None,
             transparency: Transparency::default(),
+            selection: Selection::default(),
         }
     }
 
@@ -258,15 +264,24 @@ impl Image2 {
         let is_tiff = reader.format() == Some(ImageFormat::Tiff);
         match decode_upright(reader) {
             Ok(img) => Self::from_dynamic(path, img),
-            Err(ImageError::Unsupported(_)) if is_tiff => Self::load_gray_tiff(path),
+            Err(ImageError::Unsupported(_)) if is_tiff => Self::load_gray_tiff(path, 0),
             Err(e) => Err(image_error(path, e)),
         }
     }
 
-    /// The first page of a grayscale TIFF of any integer or float sample
+    /// Page `page` (0-based) of a grayscale TIFF, its samples scaled as
+    /// [`load`](Self::load) scales them: one plane of a hyperstack (see
+    /// [`super::selection`]). A colour page is refused.
+    pub fn load_tiff_page(path: impl AsRef<Path>, page: usize) -> Result<Self> {
+        let path = path.as_ref();
+        refuse_empty_file(path)?;
+        Self::load_gray_tiff(path, page)?.refuse_non_finite(path)
+    }
+
+    /// Page `page` of a grayscale TIFF of any integer or float sample
     /// type; 8/16-bit unsigned samples are scaled as [`load`](Self::load)
     /// scales them, every other type is kept as stored.
-    fn load_gray_tiff(path: &Path) -> Result<Self> {
+    fn load_gray_tiff(path: &Path, page: usize) -> Result<Self> {
         use tiff::decoder::{Decoder, DecodingResult as D};
         let bad = |e: tiff::TiffError| IoError::MalformedTiff {
             path: path.to_path_buf(),
@@ -277,6 +292,9 @@ impl Image2 {
         };
         let file = std::fs::File::open(path).map_err(|e| IoError::unreadable(path, e))?;
         let mut dec = Decoder::new(io::BufReader::new(file)).map_err(bad)?;
+        if page > 0 {
+            dec.seek_to_image(page).map_err(bad)?;
+        }
         let (w, h) = dec.dimensions().map_err(bad)?;
         let (width, height) = (w as usize, h as usize);
         if width == 0 || height == 0 {
@@ -326,6 +344,7 @@ impl Image2 {
             unit: None,
             placement: None,
             transparency: Transparency::default(),
+            selection: Selection::default(),
         })
     }
 
@@ -354,7 +373,7 @@ impl Image2 {
             Ok(img) => img,
             // Grayscale TIFFs of other sample types have their one channel.
             Err(ImageError::Unsupported(_)) if is_tiff && k == 0 => {
-                return Ok(Self::load_gray_tiff(path)?.with_colour(Colour::Channel(0)))
+                return Ok(Self::load_gray_tiff(path, 0)?.with_colour(Colour::Channel(0)))
             }
             Err(e) => return Err(image_error(path, e)),
         };
@@ -407,6 +426,7 @@ impl Image2 {
             unit: None,
             placement: None,
             transparency,
+            selection: Selection::default(),
         })
     }
 
@@ -473,6 +493,7 @@ impl Image2 {
             unit: None,
             placement: None,
             transparency,
+            selection: Selection::default(),
         })
     }
 
@@ -536,6 +557,18 @@ impl Image2 {
             frame,
             nifti_header: nifti_header.map(<[u8]>::to_vec),
         }));
+        self
+    }
+
+    /// The channel and time point of a multi-channel or time-lapse TIFF
+    /// this image is, as chosen (empty: not chosen).
+    pub fn selection(&self) -> Selection {
+        self.selection
+    }
+
+    /// The image marked as `selection` of its file's pages.
+    pub fn with_selection(mut self, selection: Selection) -> Self {
+        self.selection = selection;
         self
     }
 

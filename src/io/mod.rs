@@ -13,6 +13,7 @@ pub mod intensity;
 pub mod ome;
 pub mod render;
 pub mod resolution;
+pub mod selection;
 pub mod surface;
 pub mod volume;
 pub mod vti;
@@ -26,6 +27,7 @@ pub use image2::{
     Image2, SampleType, Transparency,
 };
 pub use render::{phase_color, save_gif, Overlay};
+pub use selection::Selection;
 pub use volume::{
     min_max_normalise, save_labels_nifti, save_labels_tiff, save_nifti, NonFiniteSamples, Volume,
 };

@@ -4,14 +4,15 @@
 //! page's description. Its first `Image` element is the first series; the
 //! `Pixels` element inside gives that series' extents: `SizeZ` slices,
 //! `SizeC` channels and `SizeT` time points, stored as `SizeZ·SizeC·SizeT`
-//! pages from the first one on (interleaved in the order `DimensionOrder`
-//! names, which matters only to pick one channel or time point out of
-//! them, not done here). A file may hold further series after it, one
+//! pages from the first one on, interleaved in the order `DimensionOrder`
+//! names (read into [`Hyperstack::order`], which picks one channel at one
+//! time point out of them). A file may hold further series after it, one
 //! `Image` element each.
 //!
 //! Read page by page, channels and time points would pass for slices, and
 //! further series for more of them. The readers refuse several channels or
-//! time points (as ImageJ hyperstacks, see [`Hyperstack`]), read only the
+//! time points unless one of each is chosen (as ImageJ hyperstacks, see
+//! [`Hyperstack`] and [`super::selection`]), read only the
 //! first series, saying so, and refuse a file whose page count is not what
 //! its OME-XML declares.
 
@@ -20,7 +21,7 @@ use std::path::Path;
 
 use roxmltree::{Document, Node};
 
-use super::hyperstack::{counted, Hyperstack, Metadata};
+use super::hyperstack::{counted, Hyperstack, Metadata, PageOrder};
 
 /// The OME-XML document of a TIFF description: `None` when the description
 /// is not OME-XML (no XML whose root is `OME`), `Some(Err(why))` when it
@@ -81,6 +82,9 @@ impl OmeLayout {
                 slices: size("SizeZ"),
                 frames: size("SizeT"),
                 metadata: Metadata::OmeXml,
+                order: pixels
+                    .attribute("DimensionOrder")
+                    .and_then(PageOrder::from_dimension_order),
             },
             series: series.max(1),
         })

@@ -43,6 +43,7 @@ use super::image2::{lerp_nodes, Colour, Image2, SampleType};
 use super::intensity::IntensityMap;
 use super::ome::OmeLayout;
 use super::resolution::{tiff_sizes, Resolution};
+use super::selection::{Selection, TiffPages};
 
 /// A 3D grayscale volume (x fastest, then y, then z) with intensities in
 /// `[0,1]` and a physical voxel spacing; see the module documentation.
@@ -67,6 +68,9 @@ pub struct Volume {
     size_warnings: Vec<String>,
     /// That only the first series was read (see [`Volume::series_warning`]).
     series_warning: Option<String>,
+    /// The channel and time point read of a hyperstack (see
+    /// [`Volume::selection`]).
+    selection: Selection,
 }
 
 impl Volume {
@@ -96,6 +100,7 @@ impl Volume {
             nifti_header: None,
             size_warnings: Vec::new(),
             series_warning: None,
+            selection: Selection::default(),
         }
     }
 
@@ -171,6 +176,12 @@ impl Volume {
         self.series_warning.as_deref()
     }
 
+    /// The channel and time point of a TIFF's pages this volume holds, as
+    /// chosen (empty: not chosen; see [`Volume::load_tiff_selected`]).
+    pub fn selection(&self) -> Selection {
+        self.selection
+    }
+
     /// The header of the NIfTI file this volume was read from.
     pub fn nifti_header(&self) -> Option<&[u8]> {
         self.nifti_header.as_deref()
@@ -219,15 +230,32 @@ impl Volume {
     /// `.nii`/`.nii.gz` as NIfTI-1 ([`Volume::load_nifti`]) and `.tif`/`.tiff`
     /// as a multi-page TIFF stack ([`Volume::load_tiff`]).
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        Self::load_selected(path, Selection::default())
+    }
+
+    /// [`Volume::load`] of one channel at one time point of a TIFF
+    /// ([`Volume::load_tiff_selected`]); a choice for any other input, which
+    /// has neither, is refused.
+    pub fn load_selected(path: impl AsRef<Path>, selection: Selection) -> Result<Self> {
         let path = path.as_ref();
+        let tiff = !path.is_dir() && super::resolution::is_tiff(path);
+        if !selection.is_empty() && !tiff {
+            return Err(IoError::NotInFile {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "{} chooses pages of a TIFF, and this is not one",
+                    selection.options()
+                ),
+            });
+        }
         if path.is_dir() {
             return Self::load_slices(path);
         }
         super::image2::refuse_empty_file(path)?;
         if is_nifti(path) {
             Self::load_nifti(path)
-        } else if super::resolution::is_tiff(path) {
-            Self::load_tiff(path)
+        } else if tiff {
+            Self::load_tiff_selected(path, selection)
         } else {
             Err(IoError::UnknownType {
                 path: path.to_path_buf(),
@@ -249,114 +277,53 @@ impl Volume {
     /// are more), and one whose page count is not what its OME-XML declares
     /// is refused.
     pub fn load_tiff(path: impl AsRef<Path>) -> Result<Self> {
-        use tiff::decoder::{Decoder, DecodingResult};
+        Self::load_tiff_selected(path, Selection::default())
+    }
+
+    /// [`Volume::load_tiff`] of one channel at one time point of a
+    /// hyperstack: only the pages of `selection` are read, in slice order
+    /// (see [`Selection`]); the voxel size is read as for any stack. An
+    /// empty selection reads as [`Volume::load_tiff`] does.
+    pub fn load_tiff_selected(path: impl AsRef<Path>, selection: Selection) -> Result<Self> {
         let path = path.as_ref();
         let file = File::open(path).map_err(|e| IoError::unreadable(path, e))?;
-        let bad = |e: tiff::TiffError| IoError::MalformedTiff {
-            path: path.to_path_buf(),
-            reason: match e {
-                tiff::TiffError::IoError(io) => io_reason(&io),
-                e => e.to_string(),
-            },
-        };
-        let mut dec = Decoder::new(BufReader::new(file)).map_err(bad)?;
+        let bad = |e| tiff_error(path, e);
+        let mut dec = tiff::decoder::Decoder::new(BufReader::new(file)).map_err(bad)?;
         let sizes = tiff_sizes(&mut dec, path);
-        if let Some(stack) = Hyperstack::of_tiff(&mut dec) {
-            return Err(IoError::NotOneVolume {
-                path: path.to_path_buf(),
-                reason: stack.refusal(),
-            });
-        }
         let ome = OmeLayout::of_tiff(&mut dec);
-        let mut raw = Samples::U8(Vec::new());
-        let mut sample_type = SampleType::Uint8;
-        let (mut nx, mut ny, mut nz) = (0usize, 0usize, 0usize);
-        loop {
-            let (w, h) = dec.dimensions().map_err(bad)?;
-            let (w, h) = (w as usize, h as usize);
-            if nz == 0 {
-                (nx, ny) = (w, h);
-                if nx == 0 || ny == 0 {
-                    return Err(IoError::empty(path, &[nx, ny]));
-                }
-            } else if (w, h) != (nx, ny) {
-                return Err(IoError::DimensionMismatch {
+        let mut pages = PageStack::new();
+        if selection.is_empty() {
+            if let Some(stack) = Hyperstack::of_tiff(&mut dec) {
+                return Err(IoError::NotOneVolume {
                     path: path.to_path_buf(),
-                    reason: format!("page {nz} is {w}x{h}, page 0 is {nx}x{ny}"),
+                    reason: stack.refusal(),
                 });
             }
-            match dec.colortype().map_err(bad)? {
-                // Packed samples of under a byte (a 1-bit bilevel mask, 2- or
-                // 4-bit gray).
-                tiff::ColorType::Gray(bits) if bits < 8 => {
-                    return Err(IoError::Unsupported {
-                        path: path.to_path_buf(),
-                        reason: format!(
-                            "page {nz} has {bits}-bit samples{}; save the stack with 8-bit \
-                             samples",
-                            if bits == 1 { " (a bilevel image)" } else { "" }
-                        ),
-                    })
+            loop {
+                pages.push(&mut dec, path)?;
+                let series_read = ome.as_ref().is_some_and(|o| pages.nz == o.pages());
+                if series_read || !dec.more_images() {
+                    break;
                 }
-                tiff::ColorType::Gray(_) => {}
-                other => {
-                    return Err(IoError::Unsupported {
-                        path: path.to_path_buf(),
-                        reason: format!(
-                            "page {nz} has colour type {other:?}, expected grayscale{}",
-                            colour_stack_hint(other)
-                        ),
-                    })
-                }
+                dec.next_image().map_err(bad)?;
             }
-            let page = dec.read_image().map_err(bad)?;
-            if nz == 0 {
-                sample_type = tiff_sample_type(&page);
+            if let Some(ome) = &ome {
+                refuse_unlike_ome(path, ome, pages.nz, &mut dec)?;
             }
-            let ok = match (&mut raw, page) {
-                (Samples::U8(v), DecodingResult::U8(p)) if nz == 0 || !v.is_empty() => {
-                    v.extend(p);
-                    true
-                }
-                (Samples::U16(v), DecodingResult::U16(p)) => {
-                    v.extend(p);
-                    true
-                }
-                (Samples::F64(v), p) if nz > 0 => append_f64(v, p),
-                (_, DecodingResult::U16(p)) if nz == 0 => {
-                    raw = Samples::U16(p);
-                    true
-                }
-                (_, p) if nz == 0 => {
-                    let mut v = Vec::new();
-                    let ok = append_f64(&mut v, p);
-                    raw = Samples::F64(v);
-                    ok
-                }
-                _ => false,
-            };
-            if !ok {
-                return Err(IoError::Unsupported {
-                    path: path.to_path_buf(),
-                    reason: format!("page {nz} has a different or unsupported sample type"),
-                });
+        } else {
+            let layout = TiffPages::of_tiff(&mut dec, path)?;
+            for page in selection.pages_of(&layout, path)? {
+                dec.seek_to_image(page).map_err(bad)?;
+                pages.push(&mut dec, path)?;
             }
-            nz += 1;
-            if raw.len() != nx * ny * nz {
-                return Err(IoError::MalformedTiff {
-                    path: path.to_path_buf(),
-                    reason: format!("page {} holds the wrong number of samples", nz - 1),
-                });
-            }
-            let series_read = ome.as_ref().is_some_and(|o| nz == o.pages());
-            if series_read || !dec.more_images() {
-                break;
-            }
-            dec.next_image().map_err(bad)?;
         }
-        if let Some(ome) = &ome {
-            refuse_unlike_ome(path, ome, nz, &mut dec)?;
-        }
+        let PageStack {
+            raw,
+            sample_type,
+            nx,
+            ny,
+            nz,
+        } = pages;
         let (data, intensity) = raw.normalise().map_err(|samples| IoError::NonFinite {
             path: path.to_path_buf(),
             samples,
@@ -385,6 +352,7 @@ impl Volume {
             source: sizes.source,
             size_warnings,
             series_warning: ome.and_then(|o| o.series_warning(path)),
+            selection,
         })
     }
 
@@ -620,6 +588,135 @@ impl Samples {
             )),
             Samples::F64(v) => min_max_normalise(&v),
         }
+    }
+}
+
+/// The pages of a TIFF stack read so far: their samples, in the type of
+/// the first, and their size.
+struct PageStack {
+    raw: Samples,
+    sample_type: SampleType,
+    nx: usize,
+    ny: usize,
+    /// Pages read.
+    nz: usize,
+}
+
+impl PageStack {
+    fn new() -> Self {
+        PageStack {
+            raw: Samples::U8(Vec::new()),
+            sample_type: SampleType::Uint8,
+            nx: 0,
+            ny: 0,
+            nz: 0,
+        }
+    }
+
+    /// Appends the decoder's current page as the next slice: a grayscale
+    /// page of the first page's size and sample type.
+    fn push<R: Read + std::io::Seek>(
+        &mut self,
+        dec: &mut tiff::decoder::Decoder<R>,
+        path: &Path,
+    ) -> Result<()> {
+        let bad = |e| tiff_error(path, e);
+        let nz = self.nz;
+        let (w, h) = dec.dimensions().map_err(bad)?;
+        let (w, h) = (w as usize, h as usize);
+        if nz == 0 {
+            (self.nx, self.ny) = (w, h);
+            if w == 0 || h == 0 {
+                return Err(IoError::empty(path, &[w, h]));
+            }
+        } else if (w, h) != (self.nx, self.ny) {
+            return Err(IoError::DimensionMismatch {
+                path: path.to_path_buf(),
+                reason: format!("page {nz} is {w}x{h}, page 0 is {}x{}", self.nx, self.ny),
+            });
+        }
+        refuse_non_gray_page(dec.colortype().map_err(bad)?, nz, path)?;
+        let page = dec.read_image().map_err(bad)?;
+        if nz == 0 {
+            self.sample_type = tiff_sample_type(&page);
+        }
+        if !self.append(page) {
+            return Err(IoError::Unsupported {
+                path: path.to_path_buf(),
+                reason: format!("page {nz} has a different or unsupported sample type"),
+            });
+        }
+        self.nz += 1;
+        if self.raw.len() != self.nx * self.ny * self.nz {
+            return Err(IoError::MalformedTiff {
+                path: path.to_path_buf(),
+                reason: format!("page {nz} holds the wrong number of samples"),
+            });
+        }
+        Ok(())
+    }
+
+    /// Appends a decoded page's samples; false when its type does not go
+    /// with the first page's or cannot be converted.
+    fn append(&mut self, page: tiff::decoder::DecodingResult) -> bool {
+        use tiff::decoder::DecodingResult;
+        let first = self.nz == 0;
+        match (&mut self.raw, page) {
+            (Samples::U8(v), DecodingResult::U8(p)) if first || !v.is_empty() => {
+                v.extend(p);
+                true
+            }
+            (Samples::U16(v), DecodingResult::U16(p)) => {
+                v.extend(p);
+                true
+            }
+            (Samples::F64(v), p) if !first => append_f64(v, p),
+            (_, DecodingResult::U16(p)) if first => {
+                self.raw = Samples::U16(p);
+                true
+            }
+            (_, p) if first => {
+                let mut v = Vec::new();
+                let ok = append_f64(&mut v, p);
+                self.raw = Samples::F64(v);
+                ok
+            }
+            _ => false,
+        }
+    }
+}
+
+/// Refuses page `nz` of a stack unless it is grayscale of 8 bits or more.
+fn refuse_non_gray_page(colour: tiff::ColorType, nz: usize, path: &Path) -> Result<()> {
+    match colour {
+        // Packed samples of under a byte (a 1-bit bilevel mask, 2- or
+        // 4-bit gray).
+        tiff::ColorType::Gray(bits) if bits < 8 => Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: format!(
+                "page {nz} has {bits}-bit samples{}; save the stack with 8-bit samples",
+                if bits == 1 { " (a bilevel image)" } else { "" }
+            ),
+        }),
+        tiff::ColorType::Gray(_) => Ok(()),
+        other => Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            reason: format!(
+                "page {nz} has colour type {other:?}, expected grayscale{}",
+                colour_stack_hint(other)
+            ),
+        }),
+    }
+}
+
+/// A TIFF decoder's error as the error of reading `path`.
+fn tiff_error(path: &Path, e: tiff::TiffError) -> IoError {
+    IoError::MalformedTiff {
+        path: path.to_path_buf(),
+        reason: match e {
+            tiff::TiffError::IoError(io) => io_reason(&io),
+            e => e.to_string(),
+        },
     }
 }
 
@@ -1775,6 +1872,21 @@ mod tests {
                 .contains("2 channels × 2 slices × 2 time points"),
             "{e}"
         );
+        // Channel 1 at time point 1: pages 4 + 1 and 4 + 2 + 1.
+        let chosen = Selection {
+            channel: Some(1),
+            time_point: Some(1),
+        };
+        let v = Volume::load_tiff_selected(&p, chosen).unwrap();
+        assert_eq!((v.dims(), v.selection()), ([2, 2, 2], chosen));
+        assert_eq!(v.get(0, 0, 0) * 255.0, 5.0);
+        assert_eq!(v.get(1, 1, 1) * 255.0, 7.0);
+        let beyond = Selection {
+            time_point: Some(2),
+            ..chosen
+        };
+        let e = Volume::load_tiff_selected(&p, beyond).unwrap_err();
+        assert!(matches!(e, IoError::NotInFile { .. }), "{e}");
     }
 
     #[test]

@@ -3,7 +3,8 @@
 //! description is the frame of every output, ahead of the plain resolution
 //! tags; an OME-XML whose sizes cannot be used falls back to the tags with
 //! one warning line naming the file. Several channels or time points are
-//! refused, naming the extents; of several series the first is segmented,
+//! refused, naming the extents and the options that choose one of each
+//! (`tests/suite/channels.rs`); of several series the first is segmented,
 //! with a warning; pages the OME-XML does not declare are refused.
 
 use crate::cli::{bin, empty_out, fails, tmp, SEGMENT, SEGMENT3D};
@@ -23,7 +24,7 @@ fn ome_xml(nx: usize, ny: usize, nz: usize, sizes: &str) -> String {
 }
 
 /// An OME document of these `Image` elements (series), as tifffile writes it.
-fn ome_document(images: &[String]) -> String {
+pub(crate) fn ome_document(images: &[String]) -> String {
     format!(
         "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\
          <OME xmlns=\"http://www.openmicroscopy.org/Schemas/OME/2016-06\" \
@@ -36,13 +37,24 @@ fn ome_document(images: &[String]) -> String {
 /// in tifffile's order (`XYZCT`: slices fastest), its `Pixels` with the
 /// attributes `sizes` and its pages from IFD `first_page` on.
 fn ome_series(i: usize, first_page: usize, extents: [usize; 5], sizes: &str) -> String {
+    ome_series_in("XYZCT", i, first_page, extents, sizes)
+}
+
+/// [`ome_series`] of pages in the `DimensionOrder` `order`.
+pub(crate) fn ome_series_in(
+    order: &str,
+    i: usize,
+    first_page: usize,
+    extents: [usize; 5],
+    sizes: &str,
+) -> String {
     let [nx, ny, nz, nc, nt] = extents;
     let channels: String = (0..nc)
         .map(|c| format!("<Channel ID=\"Channel:{i}:{c}\" SamplesPerPixel=\"1\"/>"))
         .collect();
     format!(
         "<Image ID=\"Image:{i}\" Name=\"Image{i}\">\
-         <Pixels ID=\"Pixels:{i}\" DimensionOrder=\"XYZCT\" Type=\"uint8\" SizeX=\"{nx}\" \
+         <Pixels ID=\"Pixels:{i}\" DimensionOrder=\"{order}\" Type=\"uint8\" SizeX=\"{nx}\" \
          SizeY=\"{ny}\" SizeZ=\"{nz}\" SizeC=\"{nc}\" SizeT=\"{nt}\" {sizes}>{channels}\
          <TiffData IFD=\"{first_page}\" PlaneCount=\"{}\"/></Pixels></Image>",
         nz * nc * nt
@@ -54,7 +66,7 @@ fn ome_series(i: usize, first_page: usize, extents: [usize; 5], sizes: &str) -> 
 /// micro sign) and, with `resolution`, every page the resolution tags of
 /// that unit at that many pixels per unit (tifffile writes unit NONE beside
 /// its OME-XML; without them the encoder writes 1 pixel per unit NONE).
-fn write_tiff(
+pub(crate) fn write_tiff(
     path: &Path,
     [nx, ny, nz]: [usize; 3],
     description: &str,
@@ -403,7 +415,8 @@ fn an_ome_tiff_of_two_channels_is_refused_by_both_commands() {
     );
     let args = [input.to_str().unwrap()];
     let said = "two_channels.ome.tif is an OME-TIFF of 2 channels × 12 slices × 1 time point \
-                (OME-XML); its pages are not one volume: save one channel at one time point";
+                (OME-XML); its pages are not one volume: choose one channel at one time point \
+                with --channel C (0-based: C from 0 to 1)";
     fails(&SEGMENT3D, &args, &empty_out(&d), said);
     let from_2d = fails(&SEGMENT, &args, &d.path().join("o2"), said);
     assert!(!from_2d.contains("segment3d"), "{from_2d}");
@@ -422,7 +435,8 @@ fn an_ome_tiff_of_three_time_points_is_refused_by_both_commands() {
     let lapse = ball_pages(d.path(), "lapse.ome.tif", 3, &ball_series([1, 1, 3]));
     let args = [lapse.to_str().unwrap()];
     let series = "lapse.ome.tif is an OME-TIFF time series of 3 time points (OME-XML), not \
-                  the slices of a volume: segment each time point as an image";
+                  the slices of a volume: segment one time point as an image with `dsc-seg \
+                  segment` and --time-point T (0-based: T from 0 to 2)";
     fails(&SEGMENT3D, &args, &d.path().join("o3"), series);
     fails(&SEGMENT, &args, &d.path().join("o4"), series);
 }
