@@ -44,8 +44,11 @@ pub enum Task {
         params: SegmentParams,
         /// The label image for `Init::Labels`.
         init_labels: Option<PathBuf>,
-        /// The channel of colour images to segment (else their luminance).
+        /// The channel of multi-channel TIFFs, or of colour images (else
+        /// their luminance), to segment.
         channel: Option<usize>,
+        /// The time point of time-lapse TIFFs to segment.
+        time_point: Option<usize>,
         /// The pixel size to use instead of each file's.
         spacing: Option<[f64; 2]>,
     },
@@ -57,6 +60,10 @@ pub enum Task {
         init_labels: Option<PathBuf>,
         /// The initial surface (see [`crate::pipeline::Segment3dJob::init_surface`]).
         init_surface: Option<PathBuf>,
+        /// The channel of multi-channel TIFFs to segment.
+        channel: Option<usize>,
+        /// The time point of time-lapse TIFFs to segment.
+        time_point: Option<usize>,
         /// The voxel size to use instead of each file's.
         spacing: Option<[f64; 3]>,
     },
@@ -366,12 +373,28 @@ struct Fingerprint {
     params: serde_json::Value,
     init_labels: Option<PathBuf>,
     init_surface: Option<PathBuf>,
-    /// How the input is read (`--channel`, `--spacing`).
+    /// How the input is read (`--channel`, `--time-point`, `--spacing`).
     input_options: serde_json::Value,
     outputs: Vec<String>,
     input: PathBuf,
     input_bytes: u64,
     input_modified: Option<u128>,
+}
+
+/// A fingerprint's `input_options`: how an input is read, `options` with
+/// each of `chosen` (`channel`, `time_point`) that is given. Those not
+/// given are left out, so that outputs made before they existed are still
+/// recognised.
+fn input_options(
+    mut options: serde_json::Value,
+    chosen: [(&str, Option<usize>); 2],
+) -> serde_json::Value {
+    for (name, value) in chosen {
+        if let Some(v) = value {
+            options[name] = v.into();
+        }
+    }
+    options
 }
 
 /// The completion marker: what made the outputs and the row it gave.
@@ -482,6 +505,7 @@ impl Batch {
                 params,
                 init_labels,
                 channel,
+                time_point,
                 spacing,
             } => SegmentJob {
                 source,
@@ -491,6 +515,7 @@ impl Batch {
                 outputs: self.outputs,
                 quiet: true,
                 channel: *channel,
+                time_point: *time_point,
                 spacing: *spacing,
             }
             .run()?,
@@ -498,6 +523,8 @@ impl Batch {
                 params,
                 init_labels,
                 init_surface,
+                channel,
+                time_point,
                 spacing,
             } => Segment3dJob {
                 source,
@@ -507,6 +534,8 @@ impl Batch {
                 init_surface: init_surface.clone(),
                 outputs: self.outputs,
                 quiet: true,
+                channel: *channel,
+                time_point: *time_point,
                 spacing: *spacing,
             }
             .run()?,
@@ -550,22 +579,31 @@ impl Batch {
             Task::Image {
                 init_labels,
                 channel,
+                time_point,
                 spacing,
                 ..
             } => (
                 init_labels.clone(),
                 None,
-                serde_json::json!({ "channel": channel, "spacing": spacing }),
+                input_options(
+                    serde_json::json!({ "channel": channel, "spacing": spacing }),
+                    [("time_point", *time_point), ("channel", *channel)],
+                ),
             ),
             Task::Volume {
                 init_labels,
                 init_surface,
+                channel,
+                time_point,
                 spacing,
                 ..
             } => (
                 init_labels.clone(),
                 init_surface.clone(),
-                serde_json::json!({ "spacing": spacing }),
+                input_options(
+                    serde_json::json!({ "spacing": spacing }),
+                    [("channel", *channel), ("time_point", *time_point)],
+                ),
             ),
         };
         Ok(Fingerprint {

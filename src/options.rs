@@ -213,11 +213,18 @@ pub struct SegmentOptions {
     /// implies --init labels.
     #[arg(long)]
     pub init_labels: Option<PathBuf>,
-    /// Segment channel K of a colour image (0 = red, 1 = green, 2 = blue,
-    /// 3 = alpha; for a gray image with alpha 0 = gray, 1 = alpha) instead of
-    /// its luminance.
+    /// Segment channel K (0-based) of a multi-channel TIFF (an ImageJ
+    /// hyperstack or an OME-TIFF of several channels: only that channel's
+    /// page is read), or of a colour image instead of its luminance (0 =
+    /// red, 1 = green, 2 = blue, 3 = alpha; for a gray image with alpha 0 =
+    /// gray, 1 = alpha).
     #[arg(long, value_name = "K")]
     pub channel: Option<usize>,
+    /// Segment time point T (0-based) of a time-lapse TIFF (an ImageJ
+    /// hyperstack or time series, an OME-TIFF of several time points): only
+    /// that time point's page is read.
+    #[arg(long, value_name = "T")]
+    pub time_point: Option<usize>,
     /// Pixel size X,Y to use instead of the file's (TIFF resolution tags,
     /// PNG pHYs; 1 otherwise), in the file's length unit.
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
@@ -304,6 +311,16 @@ pub struct Segment3dOptions {
     #[allow(rustdoc::broken_intra_doc_links)] // the brackets are intervals, shown as is by --help
     #[arg(long, value_name = "FILE")]
     pub init_surface: Option<PathBuf>,
+    /// Segment channel C (0-based) of a multi-channel TIFF (an ImageJ
+    /// hyperstack or an OME-TIFF of several channels): only that channel's
+    /// slices are read, at the file's voxel size.
+    #[arg(long, value_name = "C")]
+    pub channel: Option<usize>,
+    /// Segment time point T (0-based) of a time-lapse TIFF (an ImageJ
+    /// hyperstack, an OME-TIFF of several time points): only that time
+    /// point's slices are read.
+    #[arg(long, value_name = "T")]
+    pub time_point: Option<usize>,
     /// Voxel size X,Y,Z to use instead of the file's (a NIfTI's axes keep
     /// their directions and voxel 0 its place).
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]

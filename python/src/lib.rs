@@ -53,6 +53,18 @@ struct Options3 {
     unit: Option<String>,
 }
 
+/// Refuses `channel` and `time_point`, which choose the pages of an image
+/// file: an array has none (its caller indexes it instead).
+fn refuse_pages(channel: Option<usize>, time_point: Option<usize>) -> PyResult<()> {
+    if channel.is_some() || time_point.is_some() {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "channel and time_point choose a channel or time point of an image file; index \
+             the array instead",
+        ));
+    }
+    Ok(())
+}
+
 /// Segments a 2D or 3D array; `args` are command-line option arguments.
 #[pyfunction]
 fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyResult<Segmentation> {
@@ -61,11 +73,7 @@ fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyRes
     let inner = match ndim {
         2 => {
             let o = Options2::try_parse_from(argv).map_err(|e| parse_error(&e))?;
-            if o.options.channel.is_some() {
-                return Err(pyo3::exceptions::PyValueError::new_err(
-                    "channel chooses a channel of an image file; index the array instead",
-                ));
-            }
+            refuse_pages(o.options.channel, o.options.time_point)?;
             let spacing = o.options.spacing().map_err(to_py)?;
             let unit = checked_unit(o.unit)?;
             let image = convert::image(image)?.with_spacing(spacing).with_unit(unit);
@@ -78,6 +86,7 @@ fn segment(py: Python<'_>, image: &Bound<'_, PyAny>, args: Vec<String>) -> PyRes
         }
         3 => {
             let o = Options3::try_parse_from(argv).map_err(|e| parse_error(&e))?;
+            refuse_pages(o.options.channel, o.options.time_point)?;
             let volume = match o.options.spacing().map_err(to_py)? {
                 Some(spacing) => convert::volume(image)?.respaced(spacing),
                 None => convert::volume(image)?,

@@ -224,6 +224,7 @@ fn segment(a: SegmentArgs) -> Result<(), Failure> {
             params: option(a.options.params(2))?,
             init_labels: a.options.init_labels.clone(),
             channel: a.options.channel,
+            time_point: a.options.time_point,
             spacing: option(a.options.spacing())?,
         };
         return run_batch(&a.images, task, a.out, outputs, &a.batch, a.quiet);
@@ -255,6 +256,7 @@ fn segment(a: SegmentArgs) -> Result<(), Failure> {
         outputs,
         quiet: a.quiet,
         channel: a.options.channel,
+        time_point: a.options.time_point,
         spacing,
     };
     let report = run_segment(&job)?;
@@ -273,6 +275,8 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Failure> {
             params: option(a.options.params(2))?,
             init_labels: a.options.init_labels.clone(),
             init_surface: a.options.init_surface.clone(),
+            channel: a.options.channel,
+            time_point: a.options.time_point,
             spacing: option(a.options.spacing())?,
         };
         return run_batch(&a.volumes, task, a.out, outputs, &a.batch, a.quiet);
@@ -301,6 +305,8 @@ fn segment3d(a: Segment3dArgs) -> Result<(), Failure> {
         init_surface: a.options.init_surface,
         outputs,
         quiet: a.quiet,
+        channel: a.options.channel,
+        time_point: a.options.time_point,
         spacing,
     };
     let report = run_segment3d(&job)?;

@@ -13,6 +13,7 @@ use crate::error::{Error, Result};
 use crate::io::intensity::IntensityMap;
 use crate::io::ome::OmeLayout;
 use crate::io::resolution::{image_frame_and_warnings, is_tiff};
+use crate::io::selection::{Selection, TiffPages};
 use crate::io::{save_gray8_png, Colour, Frame, Image2, IoError, Overlay, Volume};
 use crate::phantom::{self, Phantom2Kind};
 use crate::segment::auto::{choose_phases, PhaseChoice};
@@ -41,8 +42,13 @@ pub struct SegmentJob {
     pub outputs: Outputs,
     /// No progress bar.
     pub quiet: bool,
-    /// Segment this channel of a colour image instead of its luminance.
+    /// Segment this channel of a multi-channel TIFF (an ImageJ hyperstack
+    /// or OME-TIFF of several channels), or of a colour image instead of
+    /// its luminance (see [`load_image_selected`]).
     pub channel: Option<usize>,
+    /// Segment this time point of a time-lapse TIFF (see
+    /// [`load_image_selected`]).
+    pub time_point: Option<usize>,
     /// Pixel size (x, y) to use instead of the file's.
     pub spacing: Option<[f64; 2]>,
 }
@@ -172,7 +178,33 @@ pub fn load_image_channel(
     source: &Source,
     channel: Option<usize>,
 ) -> Result<(Image2, Option<GroundTruth>)> {
+    let selection = Selection {
+        channel,
+        time_point: None,
+    };
+    load_image_selected(source, selection)
+}
+
+/// [`load_image`] of one channel at one time point: of a TIFF, the plane
+/// `selection` chooses of its pages (of a TIFF of several channels, the
+/// page of that channel at that time point; a choice that leaves several
+/// slices is refused with a pointer to `segment3d`); of any other image
+/// file, and of a TIFF of one channel, `selection.channel` is a colour
+/// channel, and a time point is refused where the file has none.
+pub fn load_image_selected(
+    source: &Source,
+    selection: Selection,
+) -> Result<(Image2, Option<GroundTruth>)> {
+    let channel = selection.channel;
     match source {
+        Source::File(path) if is_tiff(path) && !selection.is_empty() => {
+            Ok((load_tiff_plane(path, selection)?, None))
+        }
+        Source::File(path) if selection.time_point.is_some() => Err(Error::Usage(format!(
+            "--time-point chooses a time point of a time-lapse TIFF (an ImageJ hyperstack or \
+             an OME-TIFF); {} is not a TIFF",
+            path.display()
+        ))),
         Source::File(path) if crate::io::volume::is_nifti(path) => {
             Ok((load_nifti_slice(path, channel)?, None))
         }
@@ -342,6 +374,63 @@ fn refuse_stacks(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// The plane of a TIFF that `selection` chooses: of a file of several
+/// channels (an ImageJ hyperstack, an OME-TIFF), the page of that channel
+/// at that time point; of a file of one, `selection.channel` is a colour
+/// channel, as for any image (an OME-TIFF of RGB pages counts one). A
+/// choice that leaves several slices is a volume, refused with a pointer
+/// to `segment3d`.
+fn load_tiff_plane(path: &Path, selection: Selection) -> Result<Image2> {
+    let file = std::fs::File::open(path).map_err(|e| IoError::unreadable(path, e))?;
+    let mut dec = tiff::decoder::Decoder::new(std::io::BufReader::new(file)).map_err(|e| {
+        IoError::MalformedTiff {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        }
+    })?;
+    let layout = TiffPages::of_tiff(&mut dec, path)?;
+    let (pages_chosen, colour) = match layout.channels() {
+        1 => (
+            Selection {
+                channel: None,
+                ..selection
+            },
+            selection.channel,
+        ),
+        _ => (selection, None),
+    };
+    let pages = pages_chosen.pages_of(&layout, path)?;
+    let [page] = pages[..] else {
+        return Err(Error::Usage(format!(
+            "{} at {} holds {} slices: a volume, segment it with `{}`",
+            path.display(),
+            selection.options(),
+            pages.len(),
+            format!("dsc-seg segment3d {}", pages_chosen.options()).trim_end()
+        )));
+    };
+    let image = match page {
+        0 => Image2::load_channel(path, colour)?,
+        page => one_channel(Image2::load_tiff_page(path, page)?, colour, path)?,
+    };
+    Ok(image.with_selection(pages_chosen))
+}
+
+/// A gray image as its channel `colour` (`None`: as it is); it has only
+/// channel 0.
+fn one_channel(image: Image2, colour: Option<usize>, path: &Path) -> Result<Image2> {
+    match colour {
+        None => Ok(image),
+        Some(0) => Ok(image.with_colour(Colour::Channel(0))),
+        Some(k) => Err(IoError::NoChannel {
+            path: path.to_path_buf(),
+            channel: k,
+            channels: 1,
+        }
+        .into()),
+    }
+}
+
 /// `params` with the labels of `Init::Labels` loaded from `init_labels`
 /// (a label image of `width × height`).
 pub fn with_init_labels(
@@ -382,7 +471,11 @@ impl Job for SegmentJob {
                 "--channel chooses a channel of an image file".into(),
             ));
         }
-        let (image, truth) = load_image_channel(&self.source, self.channel)?;
+        let selection = Selection {
+            channel: self.channel,
+            time_point: self.time_point,
+        };
+        let (image, truth) = load_image_selected(&self.source, selection)?;
         Ok((image.with_spacing(self.spacing), truth))
     }
 
@@ -513,7 +606,7 @@ pub(crate) fn segment_image_then<T>(
         truth_dice,
     );
     let input = InputSummary::new(
-        (image.sample_type(), image.colour()),
+        (image.sample_type(), image.colour(), image.selection()),
         intensity,
         &report,
         &run.ordered_means,

@@ -12,6 +12,8 @@ use super::{
 use crate::dim::D3;
 use crate::error::{Error, Result};
 use crate::io::intensity::IntensityMap;
+use crate::io::resolution::is_tiff;
+use crate::io::selection::Selection;
 use crate::io::{save_labels_tiff, Colour, Volume};
 use crate::phantom::noise::to_u8;
 use crate::phantom::Phantom3Kind;
@@ -44,6 +46,11 @@ pub struct Segment3dJob {
     pub outputs: Outputs,
     /// No progress bar.
     pub quiet: bool,
+    /// The channel of a multi-channel TIFF (an ImageJ hyperstack, an
+    /// OME-TIFF) to segment (see [`load_volume_selected`]).
+    pub channel: Option<usize>,
+    /// The time point of a time-lapse TIFF to segment.
+    pub time_point: Option<usize>,
     /// The voxel size (x, y, z) to use instead of the file's.
     pub spacing: Option<[f64; 3]>,
 }
@@ -159,6 +166,16 @@ fn refuse_single_slice(path: &Path, volume: &Volume) -> Result<()> {
         return Ok(());
     }
     let (nx, ny) = (volume.nx(), volume.ny());
+    let selection = volume.selection();
+    if !selection.is_empty() {
+        return Err(Error::Usage(format!(
+            "{} at {} is one plane of {nx}×{ny} pixels: a 2D image, segment it with \
+             `dsc-seg segment {}`",
+            path.display(),
+            selection.options(),
+            selection.options()
+        )));
+    }
     let what = if path.is_dir() {
         format!("holds one slice of {nx}×{ny} pixels: a single slice is a 2D image")
     } else if crate::io::volume::is_nifti(path) {
@@ -174,10 +191,32 @@ fn refuse_single_slice(path: &Path, volume: &Volume) -> Result<()> {
 
 /// Loads (or generates) a 3D input, with the phantom's ground truth.
 pub fn load_volume(source: &Source) -> Result<(Volume, Option<GroundTruth>)> {
+    load_volume_selected(source, Selection::default())
+}
+
+/// [`load_volume`] of one channel at one time point of a TIFF
+/// ([`Volume::load_tiff_selected`]); a choice for any other input, which
+/// has neither, is refused.
+pub fn load_volume_selected(
+    source: &Source,
+    selection: Selection,
+) -> Result<(Volume, Option<GroundTruth>)> {
+    let tiff = matches!(source, Source::File(p) if !p.is_dir() && is_tiff(p));
+    if !selection.is_empty() && !tiff {
+        return Err(Error::Usage(format!(
+            "{} chooses pages of a multi-channel or time-lapse TIFF (an ImageJ hyperstack or \
+             an OME-TIFF); {} is not a TIFF",
+            selection.options(),
+            match source {
+                Source::File(p) => p.display().to_string(),
+                _ => "the input".into(),
+            }
+        )));
+    }
     match source {
         Source::File(path) => {
             refuse_image_file(path)?;
-            let volume = Volume::load(path)?;
+            let volume = Volume::load_selected(path, selection)?;
             refuse_single_slice(path, &volume)?;
             Ok((volume, None))
         }
@@ -249,7 +288,11 @@ impl Job for Segment3dJob {
 
     /// The volume, with the job's voxel size if it has one.
     fn load(&self) -> Result<(Volume, Option<GroundTruth>)> {
-        let (volume, truth) = load_volume(&self.source)?;
+        let selection = Selection {
+            channel: self.channel,
+            time_point: self.time_point,
+        };
+        let (volume, truth) = load_volume_selected(&self.source, selection)?;
         let volume = match self.spacing {
             Some(s) => volume.respaced(s),
             None => volume,
@@ -370,7 +413,7 @@ pub(crate) fn segment_volume_then<T>(
         truth_dice,
     );
     let input = InputSummary::new(
-        (volume.sample_type(), Colour::Gray),
+        (volume.sample_type(), Colour::Gray, volume.selection()),
         volume.intensity(),
         &report,
         &run.ordered_means,
@@ -502,6 +545,8 @@ mod tests {
             init_surface: None,
             outputs: Outputs::ALL,
             quiet: true,
+            channel: None,
+            time_point: None,
             spacing: None,
         };
         let report = run_segment3d(&job).unwrap();

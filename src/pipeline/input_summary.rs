@@ -4,6 +4,7 @@
 //! every other intensity of the report.
 
 use crate::io::intensity::IntensityMap;
+use crate::io::selection::Selection;
 use crate::io::{Colour, SampleType};
 use crate::segment::{SegmentError, SegmentReport};
 use serde::Serialize;
@@ -22,6 +23,12 @@ pub(crate) struct InputSummary {
     sample_type: SampleType,
     /// Gray samples, the luminance of colour ones, or one channel (volumes: gray).
     colour: Colour,
+    /// The channel and time point of a multi-channel or time-lapse TIFF
+    /// that were segmented (`channel`, `time_point`: `--channel`,
+    /// `--time-point`, 0-based; `null` when not chosen, and `channel` also
+    /// when `--channel` took a colour channel, which `colour` names).
+    #[serde(flatten)]
+    selection: Selection,
     /// The unit of `min`, `max` and `phase_means`: [`FILE_UNIT`], or
     /// [`NORMALISED_UNIT`] for a phantom (an array's values count as a file's).
     intensity_unit: &'static str,
@@ -42,11 +49,12 @@ pub(crate) struct InputSummary {
 }
 
 impl InputSummary {
-    /// The summary of an input of `sample_type` and `colour` whose loaded
-    /// values map back to the file's by `map` (`None`: no file), from the
-    /// run's `report` and its final means by output value, `ordered_means`.
+    /// The summary of an input of `sample_type` and `colour`, the pages
+    /// `selection` of its file, whose loaded values map back to the file's
+    /// by `map` (`None`: no file), from the run's `report` and its final
+    /// means by output value, `ordered_means`.
     pub(crate) fn new(
-        (sample_type, colour): (SampleType, Colour),
+        (sample_type, colour, selection): (SampleType, Colour, Selection),
         map: Option<IntensityMap>,
         report: &SegmentReport,
         ordered_means: &[Option<f64>],
@@ -67,6 +75,7 @@ impl InputSummary {
         InputSummary {
             sample_type,
             colour,
+            selection,
             intensity_unit: if map.is_some() {
                 FILE_UNIT
             } else {

@@ -18,12 +18,12 @@ pub mod d3;
 mod input_summary;
 
 pub use d2::{
-    load_image, load_image_channel, run_phantom, run_segment, save_overlay_png, segment_image,
-    with_init_labels, SegmentJob,
+    load_image, load_image_channel, load_image_selected, run_phantom, run_segment,
+    save_overlay_png, segment_image, with_init_labels, SegmentJob,
 };
 pub use d3::{
-    load_volume, run_phantom3d, run_segment3d, segment_volume, with_init_labels3, QualitySummary,
-    Segment3dJob,
+    load_volume, load_volume_selected, run_phantom3d, run_segment3d, segment_volume,
+    with_init_labels3, QualitySummary, Segment3dJob,
 };
 
 use crate::error::{Error, Result};

@@ -2,6 +2,7 @@
 
 mod adaptive;
 mod batch;
+mod channels;
 mod cli;
 mod cli3d;
 mod common;

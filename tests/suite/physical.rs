@@ -104,6 +104,8 @@ fn an_anisotropic_flipped_nifti_ball_is_round_in_millimetres_and_keeps_its_geome
         init_surface: None,
         outputs: Outputs::ALL,
         quiet: true,
+        channel: None,
+        time_point: None,
         spacing: None,
     };
     run_segment3d(&job).unwrap();
