@@ -1,8 +1,9 @@
 //! A smooth trend of intensity inside the phases (uneven illumination, a
 //! bias field) is reported: the two-phase phantom under a ramp of
 //! illumination across the image, in 2D and 3D, comes out with a warning
-//! and the trend in the report; the same images without the ramp, and the
-//! four-phase phantom, do not.
+//! and the trend in the report; the same images without the ramp, the
+//! four-phase phantom, and discs of several brightnesses in one phase on a
+//! flat background, do not.
 
 use dsc_seg::io::{Image2, Volume};
 use dsc_seg::phantom::shapes2d::{four_phase, two_phase};
@@ -109,4 +110,45 @@ fn a_shaded_volume_is_warned_of_and_the_same_volume_unshaded_is_not() {
             .any(|w| w.contains("drifts smoothly") && w.contains("z = ")),
         "{warnings:?}"
     );
+}
+
+/// A `SIDE`² image of six discs of radius 24 on a flat background of 0.2:
+/// three columns of discs at 0.55, 0.7 and 0.85 from left to right (one
+/// phase of two), with uniform noise of ±0.1.
+fn discs() -> Vec<f32> {
+    let s = SIDE as f64;
+    let mut state = 12345u64;
+    let mut data = Vec::with_capacity(SIDE * SIDE);
+    for y in 0..SIDE {
+        for x in 0..SIDE {
+            let (px, py) = (x as f64, y as f64);
+            let column = (0..3).find(|&c| {
+                let cx = s * (1.0 + 2.0 * c as f64) / 6.0;
+                [s / 4.0, 3.0 * s / 4.0]
+                    .iter()
+                    .any(|cy| (px - cx).powi(2) + (py - cy).powi(2) < 24.0 * 24.0)
+            });
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let noise = 0.2 * ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5);
+            let level = column.map_or(0.2, |c| 0.55 + 0.15 * c as f64);
+            data.push((level + noise) as f32);
+        }
+    }
+    data
+}
+
+#[test]
+fn discs_of_several_brightnesses_in_one_phase_are_not_warned_of() {
+    let image = Image2::from_raw(SIDE, SIDE, discs());
+    let seg = segment_image(&image, SegmentParams::new(2), Provenance::array(), true).unwrap();
+    let trends = seg.summary.shading.as_ref().expect("looked for");
+    let ones = &trends[1];
+    // the discs' levels rise across the image: a trend over the whole
+    // phase, but none inside a disc
+    assert!(ones.ratio > 0.25 && ones.significance > 4.0, "{trends:?}");
+    assert!(ones.within < 0.5, "{trends:?}");
+    assert!(warned(trends).is_empty(), "{trends:?}");
+    assert_eq!(shading_warnings(&seg.summary.warnings), 0);
 }
