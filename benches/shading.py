@@ -11,8 +11,9 @@ vignette (factor 1 − a·r²/r_corner² from the centre) and an additive ramp
 a multiplicative ramp along z (a = 0.2, 0.4), and the brain-like volume at
 --size 96 (its own ±12 % bias field). Each is segmented with the defaults and
 its number of phases; the script prints, per run, the mean Dice against the
-truth and the largest trend/gap ratio over the phases
-(`segmentation.shading`), and whether the run warned.
+truth, the largest trend/gap ratio over the phases (`segmentation.shading`),
+the figures of the phase warned of (its significance and the slope of its
+residuals on the trend within its parts) and whether the run warned.
 
 Real images: scikit-image's camera, coins, moon, page, astronaut (gray),
 cell, text, horse, clock, brick, grass, gravel, coffee (gray) and rocket
@@ -90,8 +91,8 @@ def dice(pred: np.ndarray, truth: np.ndarray, phases: int) -> float:
 
 def summary(report: dict) -> tuple[float, str, bool]:
     """The largest trend/gap ratio, the figures of the phase warned of (else of the phase of
-    the largest ratio: trend / gap in the file's units, significance), and whether the run
-    warned."""
+    the largest ratio: trend / gap in the file's units, significance, the slope of the
+    residuals on the trend within the phase's parts), and whether the run warned."""
     trends = report["segmentation"]["shading"] or []
     if not trends:
         return 0.0, "-", False
@@ -100,7 +101,7 @@ def summary(report: dict) -> tuple[float, str, bool]:
     largest = max(t["ratio"] for t in trends)
     z = max(t["significance"] for t in trends)
     figures = (f"phase {t['phase']}: {t['trend']:.3g} / {t['gap']:.3g} = {t['ratio']:.2f}, "
-               f"z {t['significance']:.1f} (largest z {z:.1f})")
+               f"z {t['significance']:.1f}, within {t['within']:.2f} (largest z {z:.1f})")
     return largest, figures, bool(warned)
 
 
