@@ -1,7 +1,7 @@
 //! The grid of samples the trend check visits, the blocks it is cut into
 //! and the quadratic monomials of a position on it.
 
-use super::{BLOCKS_PER_AXIS, MAX_FIT_SAMPLES};
+use super::{BLOCKS, MAX_FIT_SAMPLES};
 
 /// The grid of samples the check visits, and positions on it.
 pub(super) struct Grid {
@@ -12,6 +12,9 @@ pub(super) struct Grid {
     offset: [usize; 3],
     /// Per axis, how many samples are visited along it.
     pub(super) extent: [usize; 3],
+    /// Blocks along every axis longer than one sample: as many on each,
+    /// at most [`BLOCKS`] in all.
+    blocks_per_axis: usize,
     /// Per axis longer than one sample (in order), each index's coordinate
     /// scaled to `[-1, 1]` over the image.
     scaled: Vec<(usize, Vec<f64>)>,
@@ -26,7 +29,7 @@ impl Grid {
         while visited(stride) > MAX_FIT_SAMPLES {
             stride += 1;
         }
-        let scaled = (0..3)
+        let scaled: Vec<(usize, Vec<f64>)> = (0..3)
             .filter(|&a| dims[a] > 1)
             .map(|a| {
                 let n = dims[a];
@@ -38,11 +41,17 @@ impl Grid {
             .collect();
         let offset = dims.map(|n| (n - 1) % stride / 2);
         let extent = [0, 1, 2].map(|a| (dims[a] - offset[a]).div_ceil(stride));
+        let axes = scaled.len() as u32;
+        let blocks_per_axis = (1..=BLOCKS)
+            .take_while(|b| b.pow(axes) <= BLOCKS)
+            .last()
+            .unwrap_or(1);
         Grid {
             dims,
             stride,
             offset,
             extent,
+            blocks_per_axis,
             scaled,
         }
     }
@@ -57,10 +66,9 @@ impl Grid {
         [0, 1, 2].map(|a| self.offset[a] + g[a] * self.stride)
     }
 
-    /// The block of [`BLOCKS_PER_AXIS`] along every axis that the grid
-    /// index `g` of `axis` falls in.
+    /// Which of the blocks along `axis` the grid index `g` falls in.
     pub(super) fn block(&self, axis: usize, g: usize) -> usize {
-        g * BLOCKS_PER_AXIS / self.extent[axis]
+        g * self.blocks_per_axis / self.extent[axis]
     }
 
     /// How many axes are longer than one sample.
@@ -112,9 +120,13 @@ mod tests {
     #[test]
     fn blocks_cut_every_axis_into_equal_parts() {
         let grid = Grid::new([64, 40, 1]);
+        assert_eq!(grid.blocks_per_axis, 8);
         assert_eq!(grid.block(0, 0), 0);
-        assert_eq!(grid.block(0, 63), BLOCKS_PER_AXIS - 1);
-        assert_eq!(grid.block(1, 39), BLOCKS_PER_AXIS - 1);
+        assert_eq!(grid.block(0, 63), 7);
+        assert_eq!(grid.block(1, 39), 7);
         assert_eq!(grid.block(2, 0), 0);
+        let grid = Grid::new([48, 48, 48]);
+        assert_eq!(grid.blocks_per_axis, 4);
+        assert_eq!(grid.block(2, grid.extent[2] - 1), 3);
     }
 }

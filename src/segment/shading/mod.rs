@@ -25,11 +25,12 @@
 //! do give the fit a trend, from the steps between them; but light that
 //! varies across the field changes the intensity inside every object as
 //! well, at the slope the fit found. So the phase's interior samples are
-//! cut into connected parts, each inside one of [`BLOCKS_PER_AXIS`] blocks
-//! along every axis, and the residuals are regressed on the fitted trend
-//! within the parts (each part's mean taken out): a trend of light gives a
-//! slope near 1, steps between objects a slope near 0. A phase is warned
-//! of only where that slope reaches [`MIN_WITHIN_SHARE`].
+//! cut into connected parts, each inside one of [`BLOCKS`] blocks of the
+//! image (8 along each axis in 2D, 4 in 3D), and the residuals are
+//! regressed on the fitted trend within the parts (each part's mean taken
+//! out): a trend of light gives a slope near 1, steps between objects a
+//! slope near 0. A phase is warned of only where that slope reaches
+//! [`MIN_WITHIN_SHARE`].
 //!
 //! The thresholds come from measurement (`benches/RESULTS.md`, "Uneven
 //! illumination"): on the clean benchmark phantoms the ratio reaches 0.49
@@ -83,11 +84,12 @@ pub const MIN_TREND_RATIO: f64 = 0.25;
 /// margin of two over the largest the clean phantoms give.
 pub const MIN_SIGNIFICANCE: f64 = 4.0;
 
-/// Blocks along every axis that the parts a trend must be seen in are cut
-/// at: an eighth of the image's side, so that a part spans enough of a
-/// trend of light to show its slope, and the steps between objects that
-/// touch fall mostly between parts.
-pub const BLOCKS_PER_AXIS: usize = 8;
+/// Blocks the image is cut into for the parts a trend must be seen in, as
+/// many along every axis (8 × 8 in 2D, 4 × 4 × 4 in 3D): a part then spans
+/// enough of a trend of light to show its slope against the noise, in a
+/// volume as in an image, and the steps between objects that touch fall
+/// mostly between parts.
+pub const BLOCKS: usize = 64;
 
 /// The least slope of the residuals on the fitted trend within the parts
 /// for a warning: at least half the trend is seen inside the parts. The
@@ -123,8 +125,7 @@ pub struct PhaseTrend {
     /// alone would give it.
     pub significance: f64,
     /// The slope of the residuals on the trend within the phase's parts
-    /// (connected, each inside one of [`BLOCKS_PER_AXIS`] blocks along every
-    /// axis): about 1 for a trend of light, about 0 for steps between
+    /// (connected, each inside one of [`BLOCKS`] blocks of the image): about 1 for a trend of light, about 0 for steps between
     /// objects of different brightness.
     pub within: f64,
     /// Where the trend is lowest (its 1st percentile), in pixel or voxel
