@@ -1668,17 +1668,20 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         self.run_loop(false, observe)
     }
 
-    /// The segmentation loop; with `check_first` the built-in rule is tested before
-    /// the first step too.
+    /// The segmentation loop. With `builtin_rule` (the loop of
+    /// [`run`](Self::run)) the built-in rule is tested before the first step
+    /// too, and a stop that is not convergence is the swap rule's; a stop by
+    /// [`run_until`](Self::run_until)'s observer is its own, whatever the
+    /// labels did.
     fn run_loop(
         &mut self,
-        check_first: bool,
+        builtin_rule: bool,
         mut observe: impl FnMut(&mut Self, &IterationRecord) -> Flow,
     ) -> SegmentReport {
         let t0 = Instant::now();
         let mut stopped = false;
         while self.history.len() < self.params.max_iterations
-            && !(check_first && self.converged())
+            && !(builtin_rule && self.converged())
             && !crate::cancel::requested()
         {
             let rec = self.step();
@@ -1694,7 +1697,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let converged = self.converged();
         let stop_reason = if converged {
             StopReason::Converged
-        } else if stopped && self.labels_swapping() {
+        } else if stopped && builtin_rule && self.labels_swapping() {
             StopReason::SwappingLabels
         } else if stopped {
             StopReason::Stopped

@@ -422,13 +422,7 @@ fn a_run_whose_labels_swap_stops_and_says_so() {
     let (w, h) = (256, 256);
     let mut swapped = 0;
     for seed in 1..=4 {
-        let mut image: Vec<f32> = (0..w * h)
-            .map(|i| if i % w >= w / 2 { 0.4 } else { 0.0 })
-            .collect();
-        add_gaussian_noise(&mut image, 0.04, seed);
-        for v in &mut image {
-            *v = (v.clamp(0.0, 1.0) * 255.0).round() / 255.0;
-        }
+        let image = two_noisy_halves(w, h, seed);
         let view = ImageView::new_2d(w, h, &image).unwrap();
         let mut seg = Segmentation2::new(view, SegmentParams::new(4)).unwrap();
         let report = seg.run(|_| {});
@@ -448,6 +442,53 @@ fn a_run_whose_labels_swap_stops_and_says_so() {
         }
     }
     assert!(swapped > 0, "no run swapped its labels");
+}
+
+/// A `w`×`h` image of two halves (0 and 0.4) under noise of σ 0.04, at 8
+/// bits: asked for four phases, two phases divide each half by noise.
+fn two_noisy_halves(w: usize, h: usize, seed: u64) -> Vec<f32> {
+    let mut image: Vec<f32> = (0..w * h)
+        .map(|i| if i % w >= w / 2 { 0.4 } else { 0.0 })
+        .collect();
+    add_gaussian_noise(&mut image, 0.04, seed);
+    for v in &mut image {
+        *v = (v.clamp(0.0, 1.0) * 255.0).round() / 255.0;
+    }
+    image
+}
+
+/// An observer of `run_until` that stops while the labels swap stops the
+/// run for its own reason: the report says `Stopped` and gives no swap
+/// warning, since the swap rule is the built-in rule's and was not asked.
+#[test]
+fn a_custom_stop_while_labels_swap_is_reported_as_the_observers() {
+    use dsc_seg::segment::{Flow, StopReason};
+    let (w, h) = (256, 256);
+    let mut stopped_in_a_swap = 0;
+    for seed in 1..=4 {
+        let image = two_noisy_halves(w, h, seed);
+        let view = ImageView::new_2d(w, h, &image).unwrap();
+        let mut seg = Segmentation2::new(view, SegmentParams::new(4)).unwrap();
+        let mut swapping_at_stop = false;
+        let report = seg.run_until(|s, _| {
+            swapping_at_stop = s.labels_swapping();
+            if swapping_at_stop || s.converged() {
+                Flow::Stop
+            } else {
+                Flow::Continue
+            }
+        });
+        if swapping_at_stop {
+            stopped_in_a_swap += 1;
+            assert_eq!(report.stop_reason, StopReason::Stopped, "seed {seed}");
+            assert!(
+                !report.warnings.iter().any(|w| w.contains("labels swapped")),
+                "seed {seed}: {:?}",
+                report.warnings
+            );
+        }
+    }
+    assert!(stopped_in_a_swap > 0, "no run swapped its labels");
 }
 
 /// A run from a poor start relabels a third of its cells in each of its
