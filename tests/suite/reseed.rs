@@ -37,10 +37,10 @@ fn a_lost_phase_of_close_means_is_reseeded() {
 /// two phases on the large background and merges the two brightest levels.
 /// The re-seed must split the merged pair, whose cells' means hold a second
 /// level, not the background, whose cells differ by noise only (splitting it
-/// gives a duplicate again, and the run ended with an empty phase). The
-/// darkest disks, 0.14 above the background, still lose three quarters of
-/// their pixels to it, which the report must say (an absorbed phase), and
-/// nothing else.
+/// gives a duplicate again, and the run ended with an empty phase). Judged
+/// by their cells away from the blurred edges, the re-seeds also keep the
+/// darkest disks, 0.14 above the background, which lost three quarters of
+/// their pixels to it when every cell was judged (Dice 0.868).
 #[test]
 fn the_reseed_splits_the_phase_that_merges_two_levels() {
     let ph = Phantom2Kind::Disks(6).generate(256, 0.2, 1);
@@ -49,15 +49,9 @@ fn the_reseed_splits_the_phase_that_merges_two_levels() {
     let report = seg.run(|_| {});
     assert!(report.reseeds >= 1, "{report:?}");
     assert!(seg.lost_phases().is_empty());
-    assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
-    assert!(
-        report.warnings[0].starts_with("phase 1 holds only")
-            && report.warnings[0].contains("went to its neighbours"),
-        "{:?}",
-        report.warnings
-    );
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
     let dice = mean_dice(&seg.label_image(), &ph.truth, 6);
-    assert!(dice > 0.85, "Dice {dice}");
+    assert!(dice > 0.92, "Dice {dice}");
 }
 
 /// More phases asked for than the image holds: the extra phase cannot be
@@ -549,14 +543,14 @@ fn a_custom_stop_while_labels_swap_is_reported_as_the_observers() {
     assert!(stopped_in_a_swap > 0, "no run swapped its labels");
 }
 
-/// A run from a poor start relabels a third of its cells in each of its
-/// first iterations while its energy falls (four phases of close means
-/// under σ 0.25, noise seed 2): it is settling, not swapping, and runs on
-/// to convergence.
+/// A run from a poor start relabels over a fifth of its cells in each of
+/// its first iterations while its energy falls (four phases of close means,
+/// 512², under σ 0.35, noise seed 1): it is settling, not swapping, and runs
+/// on to convergence.
 #[test]
 fn a_run_relabelling_much_while_its_energy_falls_is_not_stopped() {
     use dsc_seg::segment::StopReason;
-    let ph = Phantom2Kind::FourClose.generate(256, 0.25, 2);
+    let ph = Phantom2Kind::FourClose.generate(512, 0.35, 1);
     let view = ImageView::new_2d(ph.width, ph.height, &ph.image).unwrap();
     let mut seg = Segmentation2::new(view, SegmentParams::new(4)).unwrap();
     let report = seg.run(|_| {});
