@@ -37,8 +37,9 @@
 //! where the close phases leave few interior samples, but the significance
 //! stays at or under 2; every ramp of illumination of a tenth of the
 //! intensity or more, and scikit-image's `page`, reach both, and in each
-//! of those runs a phase warned of shows the trend inside its parts with a
-//! slope of 0.72 or more. Photographs whose phases join objects of
+//! of those 2D runs a phase warned of shows the trend inside its parts with
+//! a slope of 0.72 or more (0.65 or more on the 3D ramps, whose parts are
+//! fewer voxels across). Photographs whose phases join objects of
 //! different brightness reach the ratio and the significance but not the
 //! slope; a smooth gradient inside the regions of a phase (a sky, a lit
 //! wall) is a trend of light, and is warned of.
