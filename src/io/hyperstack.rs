@@ -140,9 +140,12 @@ impl Hyperstack {
             > 1
     }
 
-    /// How many pages the extents take.
-    pub fn pages(&self) -> usize {
-        self.channels * self.slices * self.frames
+    /// How many pages the extents take; `None` when that is more than a
+    /// `usize` counts (a crafted or corrupt description: no file holds them).
+    pub fn pages(&self) -> Option<usize> {
+        self.channels
+            .checked_mul(self.slices)?
+            .checked_mul(self.frames)
     }
 
     /// The page holding slice `z` of channel `c` at time point `t` (each
@@ -206,8 +209,8 @@ impl Hyperstack {
                 self.options_to_choose()
             ),
             (metadata, false) => format!(
-                "{} of {}{}; its pages are not one volume: choose one channel at one time \
-                 point with {}",
+                "{} of {}{}; its pages are not one volume: segment one channel at one time \
+                 point {} and {}",
                 match metadata {
                     Metadata::ImageJ => "an ImageJ hyperstack",
                     Metadata::OmeXml => "an OME-TIFF",
@@ -217,8 +220,20 @@ impl Hyperstack {
                     Metadata::ImageJ => "",
                     Metadata::OmeXml => " (OME-XML)",
                 },
+                self.command(),
                 self.options_to_choose()
             ),
+        }
+    }
+
+    /// The command that reads one channel at one time point, so that the
+    /// refusal's advice is not refused in turn: a plane for `segment`,
+    /// slices for `segment3d`.
+    fn command(&self) -> &'static str {
+        if self.slices == 1 {
+            "as an image with `dsc-seg segment`"
+        } else {
+            "as a volume with `dsc-seg segment3d`"
         }
     }
 
@@ -289,6 +304,12 @@ mod tests {
         let h = Hyperstack::from_description(two_channels).unwrap();
         assert!(!h.is_time_series());
         assert!(h.refusal().contains("2 channels × 1 slice × 5 time points"));
+        assert!(h
+            .refusal()
+            .contains("as an image with `dsc-seg segment` and --channel C"));
+        let d = "ImageJ=1.53t\nimages=20\nchannels=2\nslices=2\nframes=5\n";
+        let volumes = Hyperstack::from_description(d).unwrap().refusal();
+        assert!(volumes.contains("as a volume with `dsc-seg segment3d` and --channel C"));
         assert!(
             h.refusal()
                 .contains("--channel C --time-point T (0-based: C from 0 to 1, T from 0 to 4)"),
@@ -305,7 +326,7 @@ mod tests {
     fn imagej_pages_run_through_channels_first() {
         let d = "ImageJ=1.11a\nimages=24\nchannels=2\nslices=3\nframes=4\n";
         let h = Hyperstack::from_description(d).unwrap();
-        assert_eq!(h.pages(), 24);
+        assert_eq!(h.pages(), Some(24));
         assert_eq!(h.page(0, 1, 0), Some(1));
         assert_eq!(h.page(2, 0, 0), Some(4));
         assert_eq!(h.page(1, 1, 3), Some(3 * 6 + 2 + 1));

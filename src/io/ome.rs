@@ -105,10 +105,11 @@ impl OmeLayout {
         Self::of_tiff(&mut dec)
     }
 
-    /// The pages of the first series.
+    /// The pages of the first series; `usize::MAX` when its extents
+    /// multiply beyond a `usize`, which no file holds, so
+    /// [`OmeLayout::page_mismatch`] refuses it.
     pub fn pages(&self) -> usize {
-        let e = &self.extents;
-        e.channels * e.slices * e.frames
+        self.extents.pages().unwrap_or(usize::MAX)
     }
 
     /// The extents to refuse: those of a first series of more than one
@@ -122,7 +123,9 @@ impl OmeLayout {
     /// OME-XML declares: fewer than the first series', or, with one series,
     /// more (`None` when they agree). Completes "`path` is …".
     pub fn page_mismatch(&self, pages: usize) -> Option<String> {
-        let declared = self.pages();
+        let Some(declared) = self.extents.pages() else {
+            return Some(too_many_pages("an OME-TIFF whose OME-XML", &self.extents));
+        };
         let agree = if self.series > 1 {
             pages >= declared
         } else {
@@ -180,6 +183,17 @@ fn channel_pages(pixels: Node<'_, '_>, size_c: usize) -> usize {
     } else {
         size_c
     }
+}
+
+/// Why a description declaring `extents` is refused when they multiply
+/// beyond a `usize`: no file holds that many pages, and counting them would
+/// wrap around. Completes "`path` is …"; `what` names the description.
+pub(super) fn too_many_pages(what: &str, extents: &Hyperstack) -> String {
+    format!(
+        "{what} declares {}: more pages than any file holds, so its description is \
+         corrupt",
+        extents.extents()
+    )
 }
 
 #[cfg(test)]

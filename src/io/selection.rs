@@ -18,7 +18,7 @@ use serde::Serialize;
 
 use super::error::IoError;
 use super::hyperstack::{counted, Hyperstack, Metadata, PageOrder};
-use super::ome::OmeLayout;
+use super::ome::{too_many_pages, OmeLayout};
 
 /// The channel and time point chosen of a TIFF's pages (`None`: not
 /// chosen).
@@ -50,17 +50,41 @@ impl Selection {
     /// The pages of the chosen channel at the chosen time point, slice by
     /// slice, of the TIFF at `path` laid out as `pages` says.
     pub fn pages_of(&self, pages: &TiffPages, path: &Path) -> Result<Vec<usize>, IoError> {
-        self.pages(pages).map_err(|reason| IoError::NotInFile {
-            path: path.to_path_buf(),
-            reason,
-        })
+        self.pages_as_asked(pages, path, *self)
     }
 
-    /// [`Selection::pages_of`], the error completing "`path`: …".
-    fn pages(&self, pages: &TiffPages) -> Result<Vec<usize>, String> {
+    /// [`Selection::pages_of`] where the user `asked` for more than this
+    /// selection of pages (`--channel` taken as a colour channel of a file
+    /// of one channel): the refusals name the options as given.
+    pub fn pages_as_asked(
+        &self,
+        pages: &TiffPages,
+        path: &Path,
+        asked: Selection,
+    ) -> Result<Vec<usize>, IoError> {
+        self.pages(pages, asked)
+            .map_err(|reason| IoError::NotInFile {
+                path: path.to_path_buf(),
+                reason,
+            })
+    }
+
+    /// [`Selection::pages_as_asked`], the error completing "`path`: …".
+    /// Both indices are checked against their extents first, so an index
+    /// out of range is named even when the other axis lacks a choice.
+    fn pages(&self, pages: &TiffPages, asked: Selection) -> Result<Vec<usize>, String> {
         let stack = pages.stack();
-        let channel = self.index(self.channel, stack.channels, "channel", &stack)?;
-        let time = self.index(self.time_point, stack.frames, "time-point", &stack)?;
+        if stack.slices > pages.count {
+            return Err(format!(
+                "it declares {} in {}: which pages are which cannot be told",
+                stack.extents(),
+                counted(pages.count, "page")
+            ));
+        }
+        in_range(self.channel, stack.channels, "channel", &stack)?;
+        in_range(self.time_point, stack.frames, "time-point", &stack)?;
+        let channel = index(self.channel, stack.channels, asked, &stack)?;
+        let time = index(self.time_point, stack.frames, asked, &stack)?;
         (0..stack.slices)
             .map(|z| stack.page(z, channel, time))
             .collect::<Option<Vec<usize>>>()
@@ -72,36 +96,47 @@ impl Selection {
                 )
             })
     }
+}
 
-    /// The index chosen along an axis of `extent` entries (`option`:
-    /// `channel` or `time-point`): 0 when not chosen and the axis has one
-    /// entry; refused when not chosen along an axis of several, or beyond
-    /// the extent.
-    fn index(
-        &self,
-        chosen: Option<usize>,
-        extent: usize,
-        option: &str,
-        stack: &Hyperstack,
-    ) -> Result<usize, String> {
-        match chosen {
-            None if extent > 1 => Err(format!(
-                "it holds {}: {} chooses part of it, choose with {}",
-                stack.extents(),
-                self.options(),
-                stack.options_to_choose()
-            )),
-            None => Ok(0),
-            Some(i) if i < extent => Ok(i),
-            Some(i) => Err(format!(
-                "--{option} {i} is out of range: it holds {} (0-based: {})",
-                stack.extents(),
-                match extent {
-                    1 => format!("--{option} 0 only"),
-                    n => format!("--{option} 0 to {}", n - 1),
-                }
-            )),
-        }
+/// Refuses an index `chosen` beyond an axis of `extent` entries (`option`:
+/// `channel` or `time-point`), naming the range.
+fn in_range(
+    chosen: Option<usize>,
+    extent: usize,
+    option: &str,
+    stack: &Hyperstack,
+) -> Result<(), String> {
+    match chosen {
+        Some(i) if i >= extent => Err(format!(
+            "--{option} {i} is out of range: it holds {} (0-based: {})",
+            stack.extents(),
+            match extent {
+                1 => format!("--{option} 0 only"),
+                n => format!("--{option} 0 to {}", n - 1),
+            }
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The index chosen along an axis of `extent` entries (within it, see
+/// [`in_range`]): 0 when not chosen and the axis has one entry; refused
+/// when not chosen along an axis of several, naming the options `asked`.
+fn index(
+    chosen: Option<usize>,
+    extent: usize,
+    asked: Selection,
+    stack: &Hyperstack,
+) -> Result<usize, String> {
+    match chosen {
+        None if extent > 1 => Err(format!(
+            "it holds {}: {} chooses part of it, choose with {}",
+            stack.extents(),
+            asked.options(),
+            stack.options_to_choose()
+        )),
+        None => Ok(0),
+        Some(i) => Ok(i),
     }
 }
 
@@ -151,14 +186,19 @@ impl TiffPages {
             count = ome.pages();
         }
         let declared = imagej.or(ome.map(|o| o.extents));
-        if let Some(stack) = imagej.filter(|s| s.pages() > count) {
-            return Err(format!(
-                "an ImageJ TIFF of {} whose description declares {} for {}: which pages are \
-                 which cannot be told",
-                counted(count, "page"),
-                counted(stack.pages(), "page"),
-                stack.extents()
-            ));
+        if let Some(stack) = imagej {
+            let Some(declared) = stack.pages() else {
+                return Err(too_many_pages("an ImageJ TIFF whose description", &stack));
+            };
+            if declared > count {
+                return Err(format!(
+                    "an ImageJ TIFF of {} whose description declares {} for {}: which pages \
+                     are which cannot be told",
+                    counted(count, "page"),
+                    counted(declared, "page"),
+                    stack.extents()
+                ));
+            }
         }
         Ok(TiffPages { declared, count })
     }
@@ -198,6 +238,13 @@ mod tests {
         }
     }
 
+    impl Selection {
+        /// The pages as chosen, asked for as they are.
+        fn on(&self, pages: &TiffPages) -> Result<Vec<usize>, String> {
+            self.pages(pages, *self)
+        }
+    }
+
     fn choose(channel: Option<usize>, time_point: Option<usize>) -> Selection {
         Selection {
             channel,
@@ -208,43 +255,49 @@ mod tests {
     #[test]
     fn the_chosen_slices_in_the_declared_order() {
         let s = stack(2, 3, 2, "XYZCT");
-        assert_eq!(choose(Some(1), Some(1)).pages(&s), Ok(vec![9, 10, 11]));
+        assert_eq!(choose(Some(1), Some(1)).on(&s), Ok(vec![9, 10, 11]));
         let s = stack(2, 3, 2, "XYCZT");
-        assert_eq!(choose(Some(1), Some(0)).pages(&s), Ok(vec![1, 3, 5]));
+        assert_eq!(choose(Some(1), Some(0)).on(&s), Ok(vec![1, 3, 5]));
         let s = stack(2, 3, 2, "XYTCZ");
-        assert_eq!(choose(Some(0), Some(1)).pages(&s), Ok(vec![1, 5, 9]));
+        assert_eq!(choose(Some(0), Some(1)).on(&s), Ok(vec![1, 5, 9]));
     }
 
     #[test]
     fn an_axis_of_one_entry_takes_index_zero_only() {
         let s = stack(3, 4, 1, "XYZCT");
-        assert_eq!(choose(Some(2), None).pages(&s), Ok(vec![8, 9, 10, 11]));
-        assert_eq!(choose(Some(2), Some(0)).pages(&s), Ok(vec![8, 9, 10, 11]));
-        let e = choose(Some(2), Some(1)).pages(&s).unwrap_err();
+        assert_eq!(choose(Some(2), None).on(&s), Ok(vec![8, 9, 10, 11]));
+        assert_eq!(choose(Some(2), Some(0)).on(&s), Ok(vec![8, 9, 10, 11]));
+        let e = choose(Some(2), Some(1)).on(&s).unwrap_err();
         assert!(
             e.starts_with("--time-point 1 is out of range: it holds 3 channels × 4 slices × 1 time point (0-based: --time-point 0 only)"),
             "{e}"
         );
-        let e = choose(Some(3), None).pages(&s).unwrap_err();
+        let e = choose(Some(3), None).on(&s).unwrap_err();
         assert!(e.contains("(0-based: --channel 0 to 2)"), "{e}");
         let plain = TiffPages {
             declared: None,
             count: 5,
         };
-        assert_eq!(
-            choose(Some(0), Some(0)).pages(&plain),
-            Ok(vec![0, 1, 2, 3, 4])
-        );
-        assert!(choose(Some(1), None).pages(&plain).is_err());
+        assert_eq!(choose(Some(0), Some(0)).on(&plain), Ok(vec![0, 1, 2, 3, 4]));
+        assert!(choose(Some(1), None).on(&plain).is_err());
     }
 
     #[test]
     fn an_axis_of_several_entries_needs_a_choice() {
         let s = stack(2, 3, 4, "XYZCT");
-        let e = choose(Some(1), None).pages(&s).unwrap_err();
+        let e = choose(Some(1), None).on(&s).unwrap_err();
         assert!(
             e.contains("--channel 1 chooses part of it, choose with --channel C --time-point T"),
             "{e}"
+        );
+        let e = choose(None, Some(5)).on(&s).unwrap_err();
+        assert!(e.starts_with("--time-point 5 is out of range"), "{e}");
+        let as_colour = choose(None, None).pages(&s, choose(Some(0), None));
+        assert!(
+            as_colour
+                .unwrap_err()
+                .contains(": --channel 0 chooses part of it"),
+            "the options as given"
         );
     }
 
@@ -252,10 +305,10 @@ mod tests {
     fn pages_without_an_order_are_not_told_apart() {
         let s = stack(2, 3, 1, "");
         assert!(choose(Some(1), None)
-            .pages(&s)
+            .on(&s)
             .unwrap_err()
             .contains("no valid DimensionOrder"));
         let s = stack(2, 1, 1, "");
-        assert_eq!(choose(Some(1), None).pages(&s), Ok(vec![1]));
+        assert_eq!(choose(Some(1), None).on(&s), Ok(vec![1]));
     }
 }

@@ -399,7 +399,7 @@ fn load_tiff_plane(path: &Path, selection: Selection) -> Result<Image2> {
         ),
         _ => (selection, None),
     };
-    let pages = pages_chosen.pages_of(&layout, path)?;
+    let pages = pages_chosen.pages_as_asked(&layout, path, selection)?;
     let [page] = pages[..] else {
         return Err(Error::Usage(format!(
             "{} at {} holds {} slices: a volume, segment it with `{}`",
@@ -466,15 +466,16 @@ impl Job for SegmentJob {
     }
 
     fn load(&self) -> Result<(Image2, Option<GroundTruth>)> {
-        if self.channel.is_some() && !matches!(self.source, Source::File(_)) {
-            return Err(Error::Usage(
-                "--channel chooses a channel of an image file".into(),
-            ));
-        }
         let selection = Selection {
             channel: self.channel,
             time_point: self.time_point,
         };
+        if !selection.is_empty() && !matches!(self.source, Source::File(_)) {
+            return Err(Error::Usage(format!(
+                "{} chooses a plane of an image file",
+                selection.options()
+            )));
+        }
         let (image, truth) = load_image_selected(&self.source, selection)?;
         Ok((image.with_spacing(self.spacing), truth))
     }

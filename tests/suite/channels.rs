@@ -243,13 +243,46 @@ fn the_refusal_names_the_options_that_choose() {
     let d = tmp();
     let input = imagej_stack(d.path(), "hyper.tif", [6, 2, 2]);
     let path = input.to_str().unwrap();
-    let said = "choose one channel at one time point with --channel C --time-point T (0-based: \
-                C from 0 to 1, T from 0 to 1)";
+    let said = "segment one channel at one time point as a volume with `dsc-seg segment3d` \
+                and --channel C --time-point T (0-based: C from 0 to 1, T from 0 to 1)";
     fails(&SEGMENT3D, &[path], &empty_out(&d), said);
     fails(&SEGMENT, &[path], &d.path().join("o2"), said);
     let args = [path, "--channel", "1"];
     let said = "--channel 1 chooses part of it, choose with --channel C --time-point T";
     fails(&SEGMENT3D, &args, &d.path().join("o3"), said);
+    let args = [path, "--time-point", "5"];
+    let said = "--time-point 5 is out of range";
+    fails(&SEGMENT3D, &args, &d.path().join("o4"), said);
+    let planes = imagej_stack(d.path(), "planes.tif", [1, 2, 3]);
+    let said = "as an image with `dsc-seg segment` and --channel C --time-point T";
+    fails(
+        &SEGMENT3D,
+        &[planes.to_str().unwrap()],
+        &d.path().join("o5"),
+        said,
+    );
+}
+
+/// `--channel` of a file of one channel is a colour channel; a choice it
+/// still lacks is asked for naming the options as given.
+#[test]
+fn a_colour_channel_of_a_time_series_names_the_options_given() {
+    let d = tmp();
+    let lapse = imagej_stack(d.path(), "lapse.tif", [1, 1, 4]);
+    let args = [lapse.to_str().unwrap(), "--channel", "0"];
+    let said = "4 time points: --channel 0 chooses part of it, choose with --time-point T";
+    fails(&SEGMENT, &args, &empty_out(&d), said);
+}
+
+/// A choice of pages with no file to choose from (the built-in phantom)
+/// is a usage error, not ignored.
+#[test]
+fn a_choice_without_an_input_file_is_refused() {
+    let d = tmp();
+    let said = "--time-point 3 chooses a plane of an image file";
+    fails(&SEGMENT, &["--time-point", "3"], &empty_out(&d), said);
+    let said = "--channel 0 chooses a plane of an image file";
+    fails(&SEGMENT, &["--channel", "0"], &d.path().join("o2"), said);
 }
 
 /// A choice for an input without pages to choose from (a NIfTI, a PNG,
@@ -299,4 +332,53 @@ fn a_choice_the_input_cannot_give_is_refused() {
     let said = "is one plane of 40×40 pixels: a 2D image, segment it with `dsc-seg segment \
                 --channel 1 --time-point 0`";
     fails(&SEGMENT3D, &args, &d.path().join("o5"), said);
+}
+
+/// A description whose extents multiply beyond what a file can hold (a
+/// crafted or corrupt one: the product wraps around to 0 pages) is refused
+/// in one line, before anything is allocated for its slices.
+#[test]
+fn extents_beyond_any_file_are_refused() {
+    let d = tmp();
+    let path = d.path().join("absurd.tif");
+    let description = "ImageJ=1.54f\nimages=2\nchannels=2147483648\nslices=8589934592\n\
+                       hyperstack=true\n";
+    write_tiff(&path, [SIDE, SIDE, 2], description, None, |x, y, _| {
+        pattern(x, y, 0, 0)
+    });
+    let file = path.to_str().unwrap();
+    let said = "declares 2147483648 channels × 8589934592 slices × 1 time point: more pages";
+    fails(&SEGMENT3D, &[file, "--channel", "0"], &empty_out(&d), said);
+    fails(
+        &SEGMENT,
+        &[file, "--channel", "1"],
+        &d.path().join("o2"),
+        said,
+    );
+    let ome = d.path().join("absurd.ome.tif");
+    let series = "<Image ID=\"Image:0\"><Pixels ID=\"Pixels:0\" DimensionOrder=\"XYZCT\" \
+                  Type=\"uint8\" SizeX=\"40\" SizeY=\"40\" SizeZ=\"8589934592\" SizeC=\"2\" \
+                  SizeT=\"9223372036854775808\"><TiffData IFD=\"0\"/></Pixels></Image>"
+        .to_string();
+    write_tiff(
+        &ome,
+        [SIDE, SIDE, 2],
+        &ome_document(&[series]),
+        None,
+        |x, y, _| pattern(x, y, 0, 0),
+    );
+    let file = ome.to_str().unwrap();
+    let said = "more pages than any file holds";
+    fails(
+        &SEGMENT3D,
+        &[file, "--channel", "0"],
+        &d.path().join("o3"),
+        said,
+    );
+    fails(
+        &SEGMENT,
+        &[file, "--channel", "0"],
+        &d.path().join("o4"),
+        said,
+    );
 }
