@@ -190,6 +190,28 @@ impl Hyperstack {
         }
     }
 
+    /// [`Hyperstack::refusal`] of the TIFF `dec` reads (at its first
+    /// page): of colour pages, which `--channel` and `--time-point` do not
+    /// read (see [`colour_page`]), it advises converting them instead.
+    pub fn refusal_of<R: std::io::Read + std::io::Seek>(
+        &self,
+        dec: &mut tiff::decoder::Decoder<R>,
+    ) -> String {
+        match dec.colortype().ok().and_then(colour_page) {
+            Some(colour) => format!(
+                "{} of {} in {colour} pages: its pages are not one image or volume, and \
+                 --channel and --time-point read grayscale pages only; save it as grayscale \
+                 first (Fiji: Image › Type › 8-bit)",
+                match self.metadata {
+                    Metadata::ImageJ => "an ImageJ TIFF",
+                    Metadata::OmeXml => "an OME-TIFF",
+                },
+                self.extents()
+            ),
+            None => self.refusal(),
+        }
+    }
+
     /// Why such a file is refused, and what to do instead; completes
     /// "`path` is …".
     pub fn refusal(&self) -> String {
@@ -267,6 +289,19 @@ impl Hyperstack {
             counted(self.slices, "slice"),
             counted(self.frames, "time point")
         )
+    }
+}
+
+/// The colour type of a TIFF page (`"RGB(8)"`) unless it is grayscale.
+/// The pages of a multi-page TIFF are read by one reader, of grayscale
+/// pages only: were page 0 read as any image (colour as luminance, turned
+/// upright by its Orientation tag) and the others not, one time point of a
+/// colour time series would be read and the next refused, and its channels
+/// would come out turned against each other.
+pub fn colour_page(colour: tiff::ColorType) -> Option<String> {
+    match colour {
+        tiff::ColorType::Gray(_) => None,
+        other => Some(format!("{other:?}")),
     }
 }
 

@@ -264,24 +264,28 @@ impl Image2 {
         let is_tiff = reader.format() == Some(ImageFormat::Tiff);
         match decode_upright(reader) {
             Ok(img) => Self::from_dynamic(path, img),
-            Err(ImageError::Unsupported(_)) if is_tiff => Self::load_gray_tiff(path, 0),
+            Err(ImageError::Unsupported(_)) if is_tiff => Self::load_gray_tiff(path, None),
             Err(e) => Err(image_error(path, e)),
         }
     }
 
     /// Page `page` (0-based) of a grayscale TIFF, its samples scaled as
     /// [`load`](Self::load) scales them: one plane of a hyperstack (see
-    /// [`super::selection`]). A colour page is refused.
+    /// [`super::selection`]). A colour page is refused, page 0 too: every
+    /// page of a selection is read alike (see
+    /// [`super::hyperstack::colour_page`]).
     pub fn load_tiff_page(path: impl AsRef<Path>, page: usize) -> Result<Self> {
         let path = path.as_ref();
         refuse_empty_file(path)?;
-        Self::load_gray_tiff(path, page)?.refuse_non_finite(path)
+        Self::load_gray_tiff(path, Some(page))?.refuse_non_finite(path)
     }
 
-    /// Page `page` of a grayscale TIFF of any integer or float sample
-    /// type; 8/16-bit unsigned samples are scaled as [`load`](Self::load)
-    /// scales them, every other type is kept as stored.
-    fn load_gray_tiff(path: &Path, page: usize) -> Result<Self> {
+    /// Page `selected` (`None`: the first, read as the whole file) of a
+    /// grayscale TIFF of any integer or float sample type; 8/16-bit unsigned
+    /// samples are scaled as [`load`](Self::load) scales them, every other
+    /// type is kept as stored.
+    fn load_gray_tiff(path: &Path, selected: Option<usize>) -> Result<Self> {
+        let page = selected.unwrap_or(0);
         use tiff::decoder::{Decoder, DecodingResult as D};
         let bad = |e: tiff::TiffError| IoError::MalformedTiff {
             path: path.to_path_buf(),
@@ -300,14 +304,18 @@ impl Image2 {
         if width == 0 || height == 0 {
             return Err(IoError::empty(path, &[width, height]));
         }
-        match dec.colortype().map_err(bad)? {
-            tiff::ColorType::Gray(_) => {}
-            other => {
-                return Err(IoError::Unsupported {
-                    path: path.to_path_buf(),
-                    reason: format!("TIFF colour type {other:?}; expected grayscale"),
-                })
-            }
+        if let Some(colour) = super::hyperstack::colour_page(dec.colortype().map_err(bad)?) {
+            let reason = match selected {
+                None => format!("TIFF colour type {colour}; expected grayscale"),
+                Some(_) => format!(
+                    "TIFF colour type {colour}: --channel and --time-point read grayscale \
+                     pages only; save it as grayscale first (Fiji: Image › Type › 8-bit)"
+                ),
+            };
+            return Err(IoError::Unsupported {
+                path: path.to_path_buf(),
+                reason,
+            });
         }
         let (data, sample_type): (Vec<f32>, SampleType) = match dec.read_image().map_err(bad)? {
             D::U8(p) => (
@@ -373,7 +381,7 @@ impl Image2 {
             Ok(img) => img,
             // Grayscale TIFFs of other sample types have their one channel.
             Err(ImageError::Unsupported(_)) if is_tiff && k == 0 => {
-                return Ok(Self::load_gray_tiff(path, 0)?.with_colour(Colour::Channel(0)))
+                return Ok(Self::load_gray_tiff(path, None)?.with_colour(Colour::Channel(0)))
             }
             Err(e) => return Err(image_error(path, e)),
         };

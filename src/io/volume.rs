@@ -296,7 +296,7 @@ impl Volume {
             if let Some(stack) = Hyperstack::of_tiff(&mut dec) {
                 return Err(IoError::NotOneVolume {
                     path: path.to_path_buf(),
-                    reason: stack.refusal(),
+                    reason: stack.refusal_of(&mut dec),
                 });
             }
             loop {
@@ -710,7 +710,7 @@ fn refuse_non_gray_page(colour: tiff::ColorType, nz: usize, path: &Path) -> Resu
 }
 
 /// A TIFF decoder's error as the error of reading `path`.
-fn tiff_error(path: &Path, e: tiff::TiffError) -> IoError {
+pub(crate) fn tiff_error(path: &Path, e: tiff::TiffError) -> IoError {
     IoError::MalformedTiff {
         path: path.to_path_buf(),
         reason: match e {

@@ -254,16 +254,7 @@ fn load_nifti_slice(path: &Path, channel: Option<usize>) -> Result<Image2> {
             not_a_z_slice(volume.dims())
         )));
     };
-    match channel {
-        None => Ok(image),
-        Some(0) => Ok(image.with_colour(Colour::Channel(0))),
-        Some(k) => Err(IoError::NoChannel {
-            path: path.to_path_buf(),
-            channel: k,
-            channels: 1,
-        }
-        .into()),
-    }
+    one_channel(image, channel, path)
 }
 
 /// Why a NIfTI of `dims` voxels is not a slice `segment` reads: a volume,
@@ -347,7 +338,7 @@ fn refuse_stacks(path: &Path) -> Result<()> {
         return Err(Error::Usage(format!(
             "{} is {}",
             path.display(),
-            stack.refusal()
+            stack.refusal_of(&mut dec)
         )));
     }
     let ome = OmeLayout::of_tiff(&mut dec);
@@ -377,17 +368,13 @@ fn refuse_stacks(path: &Path) -> Result<()> {
 /// The plane of a TIFF that `selection` chooses: of a file of several
 /// channels (an ImageJ hyperstack, an OME-TIFF), the page of that channel
 /// at that time point; of a file of one, `selection.channel` is a colour
-/// channel, as for any image (an OME-TIFF of RGB pages counts one). A
-/// choice that leaves several slices is a volume, refused with a pointer
-/// to `segment3d`.
+/// channel: of one page, as for any image; of several, read alike, of
+/// grayscale pages only, whose one channel is 0. A choice that leaves
+/// several slices is a volume, refused with a pointer to `segment3d`.
 fn load_tiff_plane(path: &Path, selection: Selection) -> Result<Image2> {
     let file = std::fs::File::open(path).map_err(|e| IoError::unreadable(path, e))?;
-    let mut dec = tiff::decoder::Decoder::new(std::io::BufReader::new(file)).map_err(|e| {
-        IoError::MalformedTiff {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        }
-    })?;
+    let mut dec = tiff::decoder::Decoder::new(std::io::BufReader::new(file))
+        .map_err(|e| crate::io::volume::tiff_error(path, e))?;
     let layout = TiffPages::of_tiff(&mut dec, path)?;
     let (pages_chosen, colour) = match layout.channels() {
         1 => (
@@ -409,9 +396,11 @@ fn load_tiff_plane(path: &Path, selection: Selection) -> Result<Image2> {
             format!("dsc-seg segment3d {}", pages_chosen.options()).trim_end()
         )));
     };
-    let image = match page {
-        0 => Image2::load_channel(path, colour)?,
-        page => one_channel(Image2::load_tiff_page(path, page)?, colour, path)?,
+    // A file of one page is one image, read as any (colour, Orientation);
+    // the pages of any other are read alike (see `colour_page`).
+    let image = match layout.count {
+        1 => Image2::load_channel(path, colour)?,
+        _ => one_channel(Image2::load_tiff_page(path, page)?, colour, path)?,
     };
     Ok(image.with_selection(pages_chosen))
 }

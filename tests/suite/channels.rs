@@ -382,3 +382,41 @@ fn extents_beyond_any_file_are_refused() {
         said,
     );
 }
+
+/// Writes `frames` RGB 40 × 40 pages, an ImageJ time series.
+fn rgb_time_series(path: &Path, frames: usize) {
+    use tiff::encoder::{colortype::RGB8, TiffEncoder};
+    let file = std::fs::File::create(path).unwrap();
+    let mut enc = TiffEncoder::new(std::io::BufWriter::new(file)).unwrap();
+    let description = format!("ImageJ=1.54f\nimages={frames}\nframes={frames}\n");
+    for t in 0..frames {
+        let mut page = enc.new_image::<RGB8>(SIDE as u32, SIDE as u32).unwrap();
+        if t == 0 {
+            let tag = tiff::tags::Tag::ImageDescription;
+            page.encoder().write_tag(tag, description.as_str()).unwrap();
+        }
+        let data: Vec<u8> = (0..SIDE * SIDE * 3)
+            .map(|i| pattern(i / 3 % SIDE, i / 3 / SIDE, 0, t.min(1)))
+            .collect();
+        page.write_data(&data).unwrap();
+    }
+}
+
+/// Every page of a colour time series is read by one reader: the first
+/// time point is refused as the third is, and the refusal without a choice
+/// does not advise a choice that is refused in turn.
+#[test]
+fn colour_pages_are_refused_alike_at_every_time_point() {
+    let d = tmp();
+    let lapse = d.path().join("rgb_lapse.tif");
+    rgb_time_series(&lapse, 3);
+    let file = lapse.to_str().unwrap();
+    let said = "--channel and --time-point read grayscale pages only";
+    for t in ["0", "2"] {
+        let out = d.path().join(format!("o{t}"));
+        fails(&SEGMENT, &[file, "--time-point", t], &out, said);
+    }
+    let line = fails(&SEGMENT, &[file], &empty_out(&d), said);
+    assert!(!line.contains("--time-point T"), "{line}");
+    fails(&SEGMENT3D, &[file], &d.path().join("o3"), said);
+}
