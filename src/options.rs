@@ -214,15 +214,15 @@ pub struct SegmentOptions {
     #[arg(long)]
     pub init_labels: Option<PathBuf>,
     /// Segment channel K (0-based) of a multi-channel TIFF (an ImageJ
-    /// hyperstack or an OME-TIFF of several channels: only that channel's
-    /// page is read), or of a colour image instead of its luminance (0 =
+    /// hyperstack or an OME-TIFF of several channels: only its pixels are
+    /// decoded; of a multi-page TIFF, grayscale pages only), or of a colour image instead of its luminance (0 =
     /// red, 1 = green, 2 = blue, 3 = alpha; for a gray image with alpha 0 =
     /// gray, 1 = alpha).
     #[arg(long, value_name = "K")]
     pub channel: Option<usize>,
     /// Segment time point T (0-based) of a time-lapse TIFF (an ImageJ
     /// hyperstack or time series, an OME-TIFF of several time points): only
-    /// that time point's page is read.
+    /// its pixels are decoded (grayscale pages only).
     #[arg(long, value_name = "T")]
     pub time_point: Option<usize>,
     /// Pixel size X,Y to use instead of the file's (TIFF resolution tags,

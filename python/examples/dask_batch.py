@@ -80,7 +80,8 @@ def refuse_time_series(tif) -> None:
     if isinstance(frames, int) and frames > 1:
         raise ValueError(
             f"an ImageJ time series of {frames} time points, not the slices of a volume: "
-            "segment each time point as an image"
+            "segment each time point as an image (the dsc-seg CLI chooses one with "
+            "--time-point T, and a channel with --channel C)"
         )
 
 
@@ -108,7 +109,8 @@ def refuse_ome_channels_and_times(pixels, samples_per_pixel: int) -> None:
     if channels > 1 or times > 1:
         raise ValueError(
             f"an OME-TIFF of {channels} channels × {times} time points: "
-            "save one channel at one time point as a file of its own and segment that"
+            "save one channel at one time point as a file of its own and segment that "
+            "(the dsc-seg CLI chooses one with --channel C --time-point T)"
         )
 
 

@@ -2,8 +2,8 @@
 //!
 //! An ImageJ hyperstack or an OME-TIFF of several channels or time points
 //! is not one image or volume (see [`super::hyperstack`]); `--channel C`
-//! and `--time-point T` (both 0-based, as Fiji's macro language, tifffile
-//! and Bio-Formats count) choose the one to segment, and only its pages are
+//! and `--time-point T` (both 0-based, as tifffile and Bio-Formats count:
+//! Fiji's C1 is `--channel 0`) choose the one to segment, and only its pages are
 //! read: its slices, in order, from the page order the file declares
 //! (ImageJ: channels fastest, then slices, then time points; OME-XML: its
 //! `DimensionOrder`). An axis of one entry needs no choice, and 0 is then
