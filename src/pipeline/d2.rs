@@ -4,9 +4,8 @@
 
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
-    add_frame_and_phases, check_phantom, clamp_input, labels_of_samples, mean_dice,
-    run_with_progress, warn_missed_objects, warn_shading, GroundTruth, Job, JobTimes, Provenance,
-    RunReport, Source,
+    add_frame_and_phases, check_phantom, check_result, clamp_input, labels_of_samples, mean_dice,
+    run_with_progress, GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
 };
 use crate::dim::D2;
 use crate::error::{Error, Result};
@@ -569,8 +568,7 @@ pub(crate) fn segment_image_then<T>(
         .extend(phase_choice.iter().flat_map(PhaseChoice::warnings));
 
     let labels = seg.label_image();
-    warn_missed_objects(&seg, &view, &labels, &mut report);
-    warn_shading(
+    check_result(
         &seg,
         &view,
         &labels,

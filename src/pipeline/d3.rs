@@ -5,9 +5,8 @@
 
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
-    add_frame_and_phases, check_phantom, clamp_input, labels_of_samples, mean_dice,
-    run_with_progress, warn_missed_objects, warn_shading, GroundTruth, Job, JobTimes, Provenance,
-    RunReport, Source,
+    add_frame_and_phases, check_phantom, check_result, clamp_input, labels_of_samples, mean_dice,
+    run_with_progress, GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
 };
 use crate::dim::D3;
 use crate::error::{Error, Result};
@@ -385,8 +384,7 @@ pub(crate) fn segment_volume_then<T>(
     let segment_seconds = t_seg.elapsed().as_secs_f64();
 
     let labels = seg.label_image();
-    warn_missed_objects(&seg, &view, &labels, &mut report);
-    warn_shading(
+    check_result(
         &seg,
         &view,
         &labels,

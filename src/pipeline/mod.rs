@@ -277,42 +277,14 @@ fn ordered_means(order: &[u8], report: &SegmentReport) -> Vec<Option<f64>> {
     means
 }
 
-/// Adds to `report` a warning for each kind of object the result left
-/// inside another phase ([`missed_objects`]): structures smaller than the
-/// regularisation keeps, which no lost-phase check sees while their phase
-/// lives on elsewhere. `labels` are the output labels of `seg` over `image`.
-/// Only where the result answers for the whole image
+/// The checks of a result against its image, after the run: objects the
+/// result left inside another phase ([`warn_missed_objects`]) and smooth
+/// trends inside the phases ([`warn_shading`]), each added to `report` with
+/// its warnings. `labels` are the output labels of `seg` over `image`;
+/// `scale` turns a difference of loaded values into the file's units. Only
+/// where the result answers for the whole image
 /// ([`SegmentParams::claims_whole_image`]).
-pub(crate) fn warn_missed_objects<K: Raster>(
-    seg: &Segmentation<'_, K>,
-    image: &ImageView<'_>,
-    labels: &[u8],
-    report: &mut SegmentReport,
-) {
-    if !seg.params().claims_whole_image() {
-        return;
-    }
-    let means = ordered_means(&seg.phase_order(), report);
-    let noise = Noise {
-        sigma: report.intensity.noise,
-        correlation: report.intensity.noise_correlation,
-    };
-    let found = missed_objects(image, seg.check_image(), labels, &means, noise);
-    let three_d = image.dims[2] > 1;
-    report
-        .warnings
-        .extend(found.iter().map(|m| m.warning(three_d)));
-    report.missed_objects = Some(found);
-}
-
-/// Adds to `report` the trend of intensity fitted inside each phase
-/// ([`phase_trends`]: uneven illumination, a bias field, vignetting) and a
-/// warning for each phase whose trend spans a large share of the gap to
-/// the nearest other phase's mean; `scale` turns a difference of loaded
-/// values into the file's units. `labels` are the output labels of `seg`
-/// over `image`. Only where the result answers for the whole image
-/// ([`SegmentParams::claims_whole_image`]).
-pub(crate) fn warn_shading<K: Raster>(
+pub(crate) fn check_result<K: Raster>(
     seg: &Segmentation<'_, K>,
     image: &ImageView<'_>,
     labels: &[u8],
@@ -323,10 +295,48 @@ pub(crate) fn warn_shading<K: Raster>(
         return;
     }
     let means = ordered_means(&seg.phase_order(), report);
+    warn_missed_objects(seg, image, labels, &means, report);
+    warn_shading(image, labels, &means, scale, report);
+}
+
+/// Adds to `report` a warning for each kind of object the result left
+/// inside another phase ([`missed_objects`]): structures smaller than the
+/// regularisation keeps, which no lost-phase check sees while their phase
+/// lives on elsewhere. `means` are the final means by output value.
+fn warn_missed_objects<K: Raster>(
+    seg: &Segmentation<'_, K>,
+    image: &ImageView<'_>,
+    labels: &[u8],
+    means: &[Option<f64>],
+    report: &mut SegmentReport,
+) {
+    let noise = Noise {
+        sigma: report.intensity.noise,
+        correlation: report.intensity.noise_correlation,
+    };
+    let found = missed_objects(image, seg.check_image(), labels, means, noise);
+    let three_d = image.dims[2] > 1;
+    report
+        .warnings
+        .extend(found.iter().map(|m| m.warning(three_d)));
+    report.missed_objects = Some(found);
+}
+
+/// Adds to `report` the trend of intensity fitted inside each phase
+/// ([`phase_trends`]: uneven illumination, a bias field, vignetting) and a
+/// warning for each phase whose trend spans a large share of the gap to
+/// the nearest other phase's mean.
+fn warn_shading(
+    image: &ImageView<'_>,
+    labels: &[u8],
+    means: &[Option<f64>],
+    scale: f64,
+    report: &mut SegmentReport,
+) {
     let noise = FitNoise {
         correlation: report.intensity.noise_correlation,
     };
-    let trends = phase_trends(image, labels, &means, noise, scale);
+    let trends = phase_trends(image, labels, means, noise, scale);
     let three_d = image.dims[2] > 1;
     report.warnings.extend(
         trends

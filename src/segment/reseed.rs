@@ -379,16 +379,12 @@ fn most_structured_split<K: Raster>(
     noise: f64,
 ) -> Option<(usize, f64)> {
     let ranges = cell_mean_ranges(complex, cells, phases.count.len(), (low, high));
-    let judge = |away_only: bool| {
-        let near = if away_only {
-            near_interface(complex)
-        } else {
-            Vec::new()
-        };
-        let judged = |c: CellId| !away_only || !complex.cell(c).iter().any(|v| near[v.index()]);
+    let near = near_interface(complex);
+    let away = |c: CellId| !complex.cell(c).iter().any(|v| near[v.index()]);
+    let split = |judged: &dyn Fn(CellId) -> bool| {
         best_split(complex, cells, phases, into, &ranges, noise, judged)
     };
-    judge(true).or_else(|| judge(false))
+    split(&away).or_else(|| split(&|_| true))
 }
 
 /// The phase (other than `into`) whose least-variance split of the means of
@@ -402,7 +398,7 @@ fn best_split<K: Raster>(
     into: Label,
     ranges: &[(f64, f64)],
     noise: f64,
-    judged: impl Fn(CellId) -> bool,
+    judged: &dyn Fn(CellId) -> bool,
 ) -> Option<(usize, f64)> {
     let n = phases.count.len();
     let mut hists: Vec<Histogram> = ranges
