@@ -480,11 +480,7 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         let helper = Helper::new();
         let check_image = CheckImage::default();
         // The mesh on this thread; the smoothed images on the helper.
-        // (The force's smoothing is not on the adaptive mesh: it refines to
-        // resolve the detail a smoothed image would blur.)
-        let force_smoothing = gap
-            .filter(|_| !params.sizing.adaptive)
-            .map(|gap| force_smoothing(intensity.noise, gap));
+        let force_smoothing = gap.map(|gap| force_smoothing(intensity.noise, gap));
         let region = models.force_mut::<RegionForce<K>>();
         let checks_now = K::N == 2 && params.claims_whole_image();
         let (complex, ()) = helper.here().join(

@@ -18,9 +18,13 @@
 //! detail is what the segmentation is for.
 //!
 //! Only the region force samples the smoothed copy: the cell statistics, the
-//! phase means, the label flips and the energy read the input. Adaptive runs
-//! sample the input too: their mesh refines to resolve the detail (lines and
-//! blobs of 3–5 px) that the smoothing would blur.
+//! phase means, the label flips and the energy read the input. So the
+//! adaptive mesh, whose refinement asks where cells' pixels are not
+//! explained by their phase means, still finds the lines and blobs of 3–5 px
+//! the input holds; sampling the smoothed copy there too raised its Dice on
+//! every noisy phantom of the benchmark sets and found as many of the thin
+//! phantom's blobs over noise seeds 1–3 (`benches/RESULTS.md`, "Adaptive
+//! resolution").
 
 use super::image::ImageView;
 use crate::phantom::blur::gaussian_blur_2d;

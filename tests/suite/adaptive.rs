@@ -7,29 +7,18 @@ use dsc_seg::dim::{D2, D3};
 use dsc_seg::phantom::{junctions3d, shapes3d, Phantom2Kind};
 use dsc_seg::pipeline::mean_dice;
 use dsc_seg::segment::adaptive::{AdaptiveSizing, SizingParams};
-use dsc_seg::segment::models::{RegionForce, Rigidity};
+use dsc_seg::segment::models::Rigidity;
 use dsc_seg::segment::{
     Flow, ImageView, PhaseStats, Raster, SegmentParams, SegmentReport, Segmentation,
 };
 
-/// A segmentation whose region force samples the image as it is, as on the
-/// adaptive mesh (the uniform 2D mesh samples it smoothed under noise): the
-/// comparisons here are of the meshes under the same force.
-fn unsmoothed<'a, K: Raster>(view: ImageView<'a>, params: SegmentParams) -> Segmentation<'a, K> {
-    let mut seg = Segmentation::<K>::new(view, params).unwrap();
-    let region = seg.force_mut::<RegionForce<K>>().unwrap();
-    region.sample_smoothed(&view, 0.0);
-    seg
-}
-
-/// Runs to the end (unsmoothed); returns the report and the mean Dice
-/// against `truth`.
+/// Runs to the end; returns the report and the mean Dice against `truth`.
 fn run<K: Raster>(
     view: ImageView<'_>,
     params: SegmentParams,
     truth: &[u8],
 ) -> (SegmentReport, f64) {
-    let mut seg = unsmoothed::<K>(view, params);
+    let mut seg = Segmentation::<K>::new(view, params).unwrap();
     let report = seg.run(|_| {});
     assert_valid(seg.complex());
     (report, mean_dice(&seg.label_image(), truth, 2))
@@ -75,7 +64,7 @@ fn adaptive_2d_four_phase_run_settles_and_converges() {
     let ph = Phantom2Kind::FourPhase.generate(256, 0.1, 1);
     let view = || ImageView::new_2d(ph.width, ph.height, &ph.image).unwrap();
     let run4 = |params: SegmentParams| {
-        let mut seg = unsmoothed::<D2>(view(), params);
+        let mut seg = Segmentation::<D2>::new(view(), params).unwrap();
         let report = seg.run(|_| {});
         assert_valid(seg.complex());
         (report, mean_dice(&seg.label_image(), &ph.truth, 4))
@@ -325,41 +314,53 @@ fn refined_3d_start_begins_closer_to_the_answer() {
     );
 }
 
-/// Thin structures at 512² (σ 0.1), where the uniform default mesh (L = 8)
-/// loses the 4-px line and every small blob: the adaptive mesh refines
-/// where they leave the data unexplained and at pinches, and the cluster
-/// flips label the refined cells, so the 4-px line and arc come out whole
-/// and every blob of radius 3–5, inside or cut by the border, is found.
+/// Thin structures at 512² (σ 0.1, noise seeds 1–3), where the uniform
+/// default (L = 8) loses the 4-px line and arc and nearly every small blob:
+/// the adaptive mesh refines where they leave the data unexplained and at
+/// pinches, and the cluster flips label the refined cells, so the 4-px line
+/// and arc come out whole on every seed and most blobs of radius 3–5,
+/// inside or cut by the border, are found. The blobs of radius 3 are near
+/// what the energy keeps at all (`benches/RESULTS.md`, "Adaptive
+/// resolution", "What the energy keeps"), so which of them a run finds
+/// changes from seed to seed: the count is over the three.
 #[test]
 fn adaptive_2d_mesh_keeps_thin_structures_the_uniform_mesh_loses() {
-    use dsc_seg::phantom::thin::{score, thin};
+    use dsc_seg::phantom::thin::{score, thin, StructureScore};
     let size = 512;
-    let ph = thin(size, 0.1, 1);
-    let scores = |params: SegmentParams| {
+    let scores = |params: SegmentParams, seed: u64| {
+        let ph = thin(size, 0.1, seed);
         let view = ImageView::new_2d(size, size, &ph.image).unwrap();
         let mut seg = Segmentation::<D2>::new(view, params).unwrap();
         seg.run(|_| {});
         assert_valid(seg.complex());
         score(&seg.label_image(), size, 1)
     };
-    let get = |s: &[dsc_seg::phantom::thin::StructureScore], name: &str| {
-        s.iter().find(|s| s.name == name).unwrap().clone()
-    };
-    let uniform = scores(SegmentParams::new(2));
-    let graded = scores(adaptive(SegmentParams::new(2), false));
-    for name in ["line4", "arc4"] {
-        let s = get(&graded, name);
-        assert!(s.recall >= 0.9 && s.components == 1, "adaptive: {s:?}");
-        assert!(get(&uniform, name).recall < 0.5, "{uniform:?}");
-    }
-    let found = |s: &[dsc_seg::phantom::thin::StructureScore]| {
+    let get = |s: &[StructureScore], name: &str| s.iter().find(|s| s.name == name).unwrap().clone();
+    let found = |s: &[StructureScore]| {
         ["blob3", "blob4", "blob5", "border3", "border4", "border5"]
             .into_iter()
             .filter(|&name| get(s, name).recall >= 0.5)
             .count()
     };
-    assert_eq!(found(&graded), 6, "{graded:?}");
-    assert!(found(&uniform) < 6, "{uniform:?}");
+    let (mut graded_found, mut uniform_found) = (0, 0);
+    for seed in 1..=3 {
+        let uniform = scores(SegmentParams::new(2), seed);
+        let graded = scores(adaptive(SegmentParams::new(2), false), seed);
+        for name in ["line4", "arc4"] {
+            let s = get(&graded, name);
+            assert!(
+                s.recall >= 0.9 && s.components == 1,
+                "seed {seed}, adaptive: {s:?}"
+            );
+            assert!(get(&uniform, name).recall < 0.5, "seed {seed}: {uniform:?}");
+        }
+        graded_found += found(&graded);
+        uniform_found += found(&uniform);
+    }
+    assert!(
+        graded_found >= 10 && graded_found > 2 * uniform_found,
+        "blobs found over 3 seeds: {graded_found} of 18 adaptive, {uniform_found} uniform"
+    );
 }
 
 /// Thin structures at 256² (σ 0.1), where the default mesh is finer
