@@ -25,16 +25,25 @@ pub const GROWTH: f64 = 1.5;
 
 /// Each vertex's gain and the displacement it was last asked for, indexed by
 /// vertex id and carried through the complex's renumberings.
+///
+/// Only the vertices that moved hold a gain other than 1 or a displacement
+/// (a tenth of a 2D mesh's vertices, along the interface), so the record
+/// keeps them in lists and touches the per-vertex arrays only there: an
+/// evaluation and a renumbering cost one pass over the displacements and
+/// the moving vertices, not passes over every vertex's entries.
 #[derive(Debug)]
 pub(crate) struct StepGains<P> {
-    /// The gains and displacements of the last deformed state.
+    /// The gains and displacements of the last deformed state, per vertex
+    /// id: 1 and zero but at the vertices in `held`.
     gain: Vec<f64>,
     previous: Vec<P>,
-    /// The gains and displacements of the last force evaluation, which
-    /// become the ones above once the complex has deformed by them.
-    next_gain: Vec<f64>,
-    next_previous: Vec<P>,
-    /// The complex's identity and compaction count when `next_*` was
+    /// The vertices whose entries above may differ from 1 and zero.
+    held: Vec<u32>,
+    /// The last force evaluation's moving vertices (id, gain, displacement
+    /// asked for), which become the entries above once the complex has
+    /// deformed by them; every other vertex had gain 1 and no displacement.
+    next: Vec<(u32, f64, P)>,
+    /// The complex's identity and compaction count when `next` was
     /// written (`None`: nothing written yet).
     written: Option<(u64, u64)>,
 }
@@ -45,8 +54,8 @@ impl<P: Point> StepGains<P> {
         StepGains {
             gain: Vec::new(),
             previous: Vec::new(),
-            next_gain: Vec::new(),
-            next_previous: Vec::new(),
+            held: Vec::new(),
+            next: Vec::new(),
             written: None,
         }
     }
@@ -63,25 +72,28 @@ impl<P: Point> StepGains<P> {
     ) {
         self.follow(complex);
         let n = displacement.len();
-        self.gain.resize(n, 1.0);
-        self.previous.resize(n, P::zero());
-        self.next_previous.clear();
-        self.next_previous.extend_from_slice(displacement);
-        self.next_gain.clear();
-        self.next_gain.resize(n, 1.0);
-        let last = self.gain.iter().zip(&self.previous);
-        for ((d, next), (&gain, previous)) in
-            displacement.iter_mut().zip(&mut self.next_gain).zip(last)
-        {
-            // (turned back or at rest: gain 1, the displacement as it is)
-            if d.dot(previous) > 0.0 {
-                *next = (gain * GROWTH).min(max_gain);
+        if self.gain.len() < n {
+            self.gain.resize(n, 1.0);
+            self.previous.resize(n, P::zero());
+        }
+        self.next.clear();
+        for (i, d) in displacement.iter_mut().enumerate() {
+            // (at rest: gain 1, nothing to remember)
+            if *d == P::zero() {
+                continue;
+            }
+            let asked = *d;
+            let mut next = 1.0;
+            // (turned back: gain 1, the displacement as it is)
+            if d.dot(&self.previous[i]) > 0.0 {
+                next = (self.gain[i] * GROWTH).min(max_gain);
                 let length = d.length();
-                let boosted = length * *next;
+                let boosted = length * next;
                 if boosted > length {
                     *d = *d * (boosted.min(cap.max(length)) / length);
                 }
             }
+            self.next.push((i as u32, next, asked));
         }
         self.written = Some((complex.identity(), complex.compactions()));
     }
@@ -96,24 +108,35 @@ impl<P: Point> StepGains<P> {
             return;
         };
         if identity != complex.identity() || complex.compactions() > compactions + 1 {
-            self.gain.clear();
-            self.previous.clear();
+            self.forget_held();
             return;
         }
         if complex.compactions() == compactions {
             return;
         }
+        self.forget_held();
         let map = complex.last_vertex_map();
-        self.gain.clear();
-        self.gain.resize(complex.vertex_capacity(), 1.0);
-        self.previous.clear();
-        self.previous.resize(complex.vertex_capacity(), P::zero());
-        for (old, new) in map.iter().enumerate().take(self.next_gain.len()) {
-            if let Some(new) = new {
-                self.gain[new.index()] = self.next_gain[old];
-                self.previous[new.index()] = self.next_previous[old];
+        let n = complex.vertex_capacity();
+        if self.gain.len() < n {
+            self.gain.resize(n, 1.0);
+            self.previous.resize(n, P::zero());
+        }
+        for &(old, gain, asked) in &self.next {
+            if let Some(new) = map.get(old as usize).copied().flatten() {
+                self.gain[new.index()] = gain;
+                self.previous[new.index()] = asked;
+                self.held.push(new.index() as u32);
             }
         }
+    }
+
+    /// Sets every held entry back to gain 1 and no displacement.
+    fn forget_held(&mut self) {
+        for &i in &self.held {
+            self.gain[i as usize] = 1.0;
+            self.previous[i as usize] = P::zero();
+        }
+        self.held.clear();
     }
 }
 
