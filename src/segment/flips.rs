@@ -74,18 +74,55 @@ impl Flipper {
         guard: bool,
         once: bool,
     ) -> usize {
+        let rule = FlipRule::new(image, cells, phases, nu, guard);
+        match self.prepare(complex, rule) {
+            Some(rule) => self.sweep_from(complex, &rule, once, 0),
+            None => 0,
+        }
+    }
+
+    /// [`flip`](Self::flip) with these arguments right after
+    /// [`first_flip`](Self::first_flip) answered `first` on the same state
+    /// (the labels, cell statistics and means unchanged, and no other call
+    /// of this `Flipper` between): the same flips, the sweep starting at
+    /// `first` (no cell before it flips, as none has flipped before it) and
+    /// reading the means' order and the pixel-dominant phases that
+    /// `first_flip` prepared; nothing to do where `first` is `None`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn flip_after_first<K: Raster>(
+        &mut self,
+        complex: &mut Complex<K>,
+        image: &ImageView<'_>,
+        cells: &[CellStats],
+        phases: &PhaseStats,
+        nu: f64,
+        guard: bool,
+        once: bool,
+        first: Option<u32>,
+    ) -> usize {
+        let Some(first) = first else { return 0 };
+        let rule = FlipRule::new(image, cells, phases, nu, guard);
+        self.sweep_from(complex, &rule, once, first)
+    }
+
+    /// The sweep of [`flip`](Self::flip) over the cells from id `start` on
+    /// (after [`prepare`](Self::prepare)); returns how many changed label.
+    fn sweep_from<K: Raster>(
+        &mut self,
+        complex: &mut Complex<K>,
+        rule: &FlipRule<'_, '_>,
+        once: bool,
+        start: u32,
+    ) -> usize {
+        let image = rule.image;
         if once && self.flipped.len() != image.len() {
             self.flipped.clear();
             self.flipped.resize(image.len(), false);
         }
-        let Some(rule) = self.prepare(complex, FlipRule::new(image, cells, phases, nu, guard))
-        else {
-            return 0;
-        };
         let mut flips = 0;
-        for i in 0..complex.cell_capacity() as u32 {
+        for i in start..complex.cell_capacity() as u32 {
             let c = CellId::new(i);
-            let Some(t) = self.target(complex, &rule, c) else {
+            let Some(t) = self.target(complex, rule, c) else {
                 continue;
             };
             if once {
@@ -116,11 +153,27 @@ impl Flipper {
         guard: bool,
         once: bool,
     ) -> bool {
-        let Some(rule) = self.prepare(complex, FlipRule::new(image, cells, phases, nu, guard))
-        else {
-            return false;
-        };
-        (0..complex.cell_capacity() as u32).any(|i| {
+        self.first_flip(complex, image, cells, phases, nu, guard, once)
+            .is_some()
+    }
+
+    /// The id of the first cell [`flip`](Self::flip) with these arguments
+    /// would relabel, decided without changing any label (the sweep up to
+    /// its first flip, before which every cell sees the labels as they are
+    /// now); `None` where it would relabel none.
+    #[allow(clippy::too_many_arguments)]
+    pub fn first_flip<K: Raster>(
+        &mut self,
+        complex: &Complex<K>,
+        image: &ImageView<'_>,
+        cells: &[CellStats],
+        phases: &PhaseStats,
+        nu: f64,
+        guard: bool,
+        once: bool,
+    ) -> Option<u32> {
+        let rule = self.prepare(complex, FlipRule::new(image, cells, phases, nu, guard))?;
+        (0..complex.cell_capacity() as u32).find(|&i| {
             let c = CellId::new(i);
             self.target(complex, &rule, c).is_some()
                 && (!once || self.first_flip_of_pixels(complex, image, c))
@@ -327,6 +380,18 @@ impl Flipper {
         nu: f64,
     ) -> usize {
         self.component_changes(complex, cells, phases, nu);
+        if !self.changes.is_empty() {
+            complex.set_labels(&self.changes);
+        }
+        self.changes.len()
+    }
+
+    /// [`component_flips`](Self::component_flips) right after
+    /// [`would_flip_components`](Self::would_flip_components) on the same
+    /// state (the labels, cell statistics and means unchanged, and no other
+    /// call of this `Flipper` between): applies the relabelling that call
+    /// listed instead of finding it again.
+    pub fn component_flips_listed<K: Raster>(&mut self, complex: &mut Complex<K>) -> usize {
         if !self.changes.is_empty() {
             complex.set_labels(&self.changes);
         }

@@ -323,6 +323,9 @@ impl<K: Raster> ForceTerm<K> for Elasticity<K> {
 #[derive(Clone, Debug, Default)]
 pub struct CellFlips {
     flipper: Flipper,
+    /// The state of the last prediction and the first cell it found would
+    /// flip ([`Flipper::first_flip`]), for the sweep that follows it.
+    predicted: Option<(Asked, Option<u32>)>,
 }
 
 impl<K: Raster> LabelRule<K> for CellFlips {
@@ -331,15 +334,20 @@ impl<K: Raster> LabelRule<K> for CellFlips {
     }
 
     fn relabel(&mut self, complex: &mut Complex<K>, state: &IterationState<'_, '_>) -> usize {
-        self.flipper.flip(
-            complex,
-            state.image,
-            state.cells,
-            state.phases,
+        let (image, cells, phases) = (state.image, state.cells, state.phases);
+        let (nu, guard, once) = (
             state.length_weight,
             state.params.flip_guard,
             state.params.flip_once,
-        )
+        );
+        match self.predicted.take() {
+            Some((asked, first)) if asked == Asked::of(complex, state) => self
+                .flipper
+                .flip_after_first(complex, image, cells, phases, nu, guard, once, first),
+            _ => self
+                .flipper
+                .flip(complex, image, cells, phases, nu, guard, once),
+        }
     }
 
     fn would_relabel(
@@ -347,7 +355,7 @@ impl<K: Raster> LabelRule<K> for CellFlips {
         complex: &Complex<K>,
         state: &IterationState<'_, '_>,
     ) -> Option<bool> {
-        Some(self.flipper.would_flip(
+        let first = self.flipper.first_flip(
             complex,
             state.image,
             state.cells,
@@ -355,7 +363,9 @@ impl<K: Raster> LabelRule<K> for CellFlips {
             state.length_weight,
             state.params.flip_guard,
             state.params.flip_once,
-        ))
+        );
+        self.predicted = Some((Asked::of(complex, state), first));
+        Some(first.is_some())
     }
 }
 
@@ -370,6 +380,10 @@ impl<K: Raster> LabelRule<K> for CellFlips {
 pub struct ComponentFlips {
     flipper: Flipper,
     clusters: ClusterFlipper,
+    /// The state on which the flipper last listed the component flips
+    /// ([`Flipper::would_flip_components`]), for the relabelling that
+    /// follows it.
+    predicted: Option<Asked>,
 }
 
 impl<K: Raster> LabelRule<K> for ComponentFlips {
@@ -378,13 +392,17 @@ impl<K: Raster> LabelRule<K> for ComponentFlips {
     }
 
     fn relabel(&mut self, complex: &mut Complex<K>, state: &IterationState<'_, '_>) -> usize {
+        let listed = self.predicted.take() == Some(Asked::of(complex, state));
         if !state.params.flip_guard {
             return 0;
         }
         let nu = state.length_weight;
-        let mut flips = self
-            .flipper
-            .component_flips(complex, state.cells, state.phases, nu);
+        let mut flips = if listed {
+            self.flipper.component_flips_listed(complex)
+        } else {
+            self.flipper
+                .component_flips(complex, state.cells, state.phases, nu)
+        };
         if state.params.sizing.adaptive {
             flips += self.clusters.flip(complex, state.cells, state.phases, nu);
         }
@@ -396,17 +414,67 @@ impl<K: Raster> LabelRule<K> for ComponentFlips {
         complex: &Complex<K>,
         state: &IterationState<'_, '_>,
     ) -> Option<bool> {
+        self.predicted = None;
+        if !state.params.flip_guard {
+            return Some(false);
+        }
         let nu = state.length_weight;
+        let components = self
+            .flipper
+            .would_flip_components(complex, state.cells, state.phases, nu);
+        self.predicted = Some(Asked::of(complex, state));
         Some(
-            state.params.flip_guard
-                && (self
-                    .flipper
-                    .would_flip_components(complex, state.cells, state.phases, nu)
-                    || (state.params.sizing.adaptive
-                        && self
-                            .clusters
-                            .would_flip(complex, state.cells, state.phases, nu))),
+            components
+                || (state.params.sizing.adaptive
+                    && self
+                        .clusters
+                        .would_flip(complex, state.cells, state.phases, nu)),
         )
+    }
+}
+
+/// The state a label rule's prediction was made on: the complex (its
+/// identity and its clocks of moves, relabellings and compactions), the
+/// iteration and force evaluation, the image and cell statistics read (by
+/// address), and the length weight and phase means. A `relabel` on the
+/// same state follows its prediction with nothing changed between (the
+/// cell statistics change only with the mesh, between iterations), so it
+/// may take up the prediction's work.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Asked {
+    complex: [u64; 4],
+    round: [u64; 2],
+    read: [usize; 3],
+    length_weight: u64,
+    means: u64,
+}
+
+impl Asked {
+    fn of<K: Raster>(complex: &Complex<K>, state: &IterationState<'_, '_>) -> Self {
+        // (the means' bits folded FNV-1a style: no allocation per iteration)
+        let means = state
+            .phases
+            .mean
+            .iter()
+            .fold(0xcbf2_9ce4_8422_2325, |h, m| {
+                (h ^ m.map_or(u64::MAX, f64::to_bits)).wrapping_mul(0x0100_0000_01b3)
+            });
+        Asked {
+            complex: [
+                complex.identity(),
+                complex.move_clock(),
+                complex.relabels(),
+                complex.compactions(),
+            ],
+            round: [state.iteration as u64, state.evaluation],
+            read: [
+                state.image.data.as_ptr() as usize,
+                state.cells.as_ptr() as usize,
+                state.cells.len(),
+            ],
+            length_weight: state.length_weight.to_bits(),
+            means,
+        }
     }
 }
 
