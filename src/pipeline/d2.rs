@@ -5,7 +5,7 @@
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
     add_frame_and_phases, check_phantom, check_result, clamp_input, labels_of_samples, mean_dice,
-    run_with_progress, GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
+    run_with_progress, ClampedInput, GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
 };
 use crate::dim::D2;
 use crate::error::{Error, Result};
@@ -521,10 +521,16 @@ pub(crate) fn segment_image_then<T>(
         Some(map) => map.original_sample(f64::from(v), image.sample_type()),
         None => f64::from(v),
     };
-    let clamped = clamp_input(image.data(), [w, h, 1], file_value, "pixels");
+    let ClampedInput {
+        data: clamped,
+        robust_range,
+    } = clamp_input(image.data(), [w, h, 1], file_value, "pixels");
     let data = clamped.as_ref().map_or(image.data(), |(c, _)| c.as_slice());
-    let view = ImageView::new_2d(w, h, data)
+    let mut view = ImageView::new_2d(w, h, data)
         .ok_or_else(|| Error::Usage("image buffer does not match its size".into()))?;
+    if let Some(range) = robust_range {
+        view = view.with_robust_range(range);
+    }
     let file_values = |e| with_file_values(e, intensity, image.sample_type());
     let mut params = params;
     let phase_choice = match params.auto_phases {

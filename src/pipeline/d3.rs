@@ -6,7 +6,7 @@
 use super::input_summary::{with_file_values, InputSummary};
 use super::{
     add_frame_and_phases, check_phantom, check_result, clamp_input, labels_of_samples, mean_dice,
-    run_with_progress, GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
+    run_with_progress, ClampedInput, GroundTruth, Job, JobTimes, Provenance, RunReport, Source,
 };
 use crate::dim::D3;
 use crate::error::{Error, Result};
@@ -351,11 +351,14 @@ pub(crate) fn segment_volume_then<T>(
         Some(map) => map.original_sample(f64::from(v), volume.sample_type()),
         None => f64::from(v),
     };
-    let clamped = clamp_input(volume.data(), dims, file_value, "voxels");
+    let ClampedInput {
+        data: clamped,
+        robust_range,
+    } = clamp_input(volume.data(), dims, file_value, "voxels");
     let data = clamped
         .as_ref()
         .map_or(volume.data(), |(c, _)| c.as_slice());
-    let view = ImageView::new_3d(dims, data)
+    let mut view = ImageView::new_3d(dims, data)
         .ok_or_else(|| Error::Usage("volume buffer does not match its size".into()))?
         .with_spacing(frame.domain_scale)
         .ok_or_else(|| {
@@ -364,6 +367,9 @@ pub(crate) fn segment_volume_then<T>(
                 frame.spacing
             ))
         })?;
+    if let Some(range) = robust_range {
+        view = view.with_robust_range(range);
+    }
     let mut seg = match init_surface {
         None => Segmentation::<D3>::new(view, params.clone())
             .map_err(|e| with_file_values(e, volume.intensity(), volume.sample_type()))?,

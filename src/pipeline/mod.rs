@@ -30,7 +30,7 @@ use crate::error::{Error, Result};
 use crate::io::Frame;
 use crate::segment::measurements::Measurements;
 use crate::segment::missed_objects::{missed_objects, Noise};
-use crate::segment::outliers::{clamp_outliers, Outliers};
+use crate::segment::outliers::{clamp_outliers_keeping_range, Outliers};
 use crate::segment::params::MAX_PHASES;
 use crate::segment::shading::{phase_trends, FitNoise};
 use crate::segment::ImageView;
@@ -347,18 +347,34 @@ fn warn_shading(
     report.shading = Some(trends);
 }
 
+/// The input's samples with their outliers clamped ([`clamp_input`]).
+pub(crate) struct ClampedInput {
+    /// The clamped samples and the warning that says so (`None`: the
+    /// samples stand as they are).
+    pub data: Option<(Vec<f32>, String)>,
+    /// The robust range the clamp selected of samples that stand, for
+    /// [`ImageView::with_robust_range`](crate::segment::ImageView::with_robust_range).
+    pub robust_range: Option<(f64, f64)>,
+}
+
 /// The input's samples `data` (on the grid `dims`) with their outliers clamped
-/// ([`clamp_outliers`]) and the warning that says so, its values in the
-/// file's units (`file_value`); `None` where no sample lies far outside the
-/// rest. `samples` names them ("pixels" or "voxels").
+/// ([`clamp_outliers`](crate::segment::outliers::clamp_outliers)) and the
+/// warning that says so, its values in the file's units (`file_value`);
+/// no data where no sample lies far outside the rest. `samples` names them
+/// ("pixels" or "voxels").
 pub(crate) fn clamp_input(
     data: &[f32],
     dims: [usize; 3],
     file_value: impl Fn(f32) -> f64,
     samples: &str,
-) -> Option<(Vec<f32>, String)> {
-    let (clamped, outliers) = clamp_outliers(data, dims)?;
-    Some((clamped, outlier_warning(&outliers, file_value, samples)))
+) -> ClampedInput {
+    let clamp = clamp_outliers_keeping_range(data, dims);
+    ClampedInput {
+        data: clamp
+            .clamped
+            .map(|(clamped, outliers)| (clamped, outlier_warning(&outliers, file_value, samples))),
+        robust_range: clamp.robust_range,
+    }
 }
 
 /// The warning of [`clamp_input`].

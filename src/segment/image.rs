@@ -16,6 +16,9 @@ pub struct ImageView<'a> {
     pub data: &'a [f32],
     /// Size of a voxel along x, y, z in the complex's units (1 for 2D images).
     pub spacing: [f64; 3],
+    /// The robust range of `data` where the caller has selected it already
+    /// ([`ImageView::with_robust_range`]).
+    robust_range: Option<(f64, f64)>,
 }
 
 impl<'a> ImageView<'a> {
@@ -25,6 +28,7 @@ impl<'a> ImageView<'a> {
             dims: [width, height, 1],
             data,
             spacing: [1.0; 3],
+            robust_range: None,
         })
     }
 
@@ -38,6 +42,7 @@ impl<'a> ImageView<'a> {
             dims,
             data,
             spacing: [1.0; 3],
+            robust_range: None,
         })
     }
 
@@ -48,6 +53,35 @@ impl<'a> ImageView<'a> {
             .iter()
             .all(|s| s.is_finite() && *s > 0.0)
             .then_some(ImageView { spacing, ..self })
+    }
+
+    /// The view of the same samples with their robust range
+    /// ([`robust_range`](super::intensity::robust_range) of `data` among at
+    /// most [`MAX_SAMPLES`](super::intensity::MAX_SAMPLES), over their
+    /// extremes) given: the outlier clamp selects it before the
+    /// segmentation, whose intensity figures then read it instead of
+    /// selecting the same quantiles again.
+    pub fn with_robust_range(self, range: (f64, f64)) -> Self {
+        ImageView {
+            robust_range: Some(range),
+            ..self
+        }
+    }
+
+    /// The robust range given by [`with_robust_range`](Self::with_robust_range).
+    pub fn known_robust_range(&self) -> Option<(f64, f64)> {
+        self.robust_range
+    }
+
+    /// A view of other samples `data` on the same grid (a smoothed copy):
+    /// nothing known of them.
+    pub fn with_data<'b>(&self, data: &'b [f32]) -> ImageView<'b> {
+        ImageView {
+            dims: self.dims,
+            data,
+            spacing: self.spacing,
+            robust_range: None,
+        }
     }
 
     /// The size of one sample step ([`sample_step`](super::params::sample_step)):

@@ -58,7 +58,9 @@ impl IntensityStats {
     /// The figures of `image` (finite samples, at least one).
     pub fn of(image: &ImageView<'_>) -> Self {
         let (min, max) = image.range().unwrap_or((0.0, 0.0));
-        let (low, high) = robust_range(image.data, (min, max), MAX_SAMPLES);
+        let (low, high) = image
+            .known_robust_range()
+            .unwrap_or_else(|| robust_range(image.data, (min, max), MAX_SAMPLES));
         let (noise, pairs) = noise_sigma(image, (min as f32, max as f32));
         IntensityStats {
             min,

@@ -42,6 +42,30 @@ pub struct Outliers {
 /// than the robust range's width beyond it (the data are then used as they
 /// are).
 pub fn clamp_outliers(data: &[f32], dims: [usize; 3]) -> Option<(Vec<f32>, Outliers)> {
+    clamp_outliers_keeping_range(data, dims).clamped
+}
+
+/// What [`clamp_outliers_keeping_range`] gives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clamp {
+    /// The samples with their outliers clamped, and what was clamped
+    /// (`None`: the samples stand as they are).
+    pub clamped: Option<(Vec<f32>, Outliers)>,
+    /// The robust range selected of samples that stand as they are
+    /// ([`robust_range`] over their extremes; `None` where they were
+    /// clamped or are not all finite).
+    pub robust_range: Option<(f64, f64)>,
+}
+
+/// [`clamp_outliers`], and the robust range it selected where it leaves
+/// the data as they are: the segmentation's intensity figures take it
+/// ([`ImageView::with_robust_range`](super::image::ImageView::with_robust_range))
+/// instead of selecting it again.
+pub fn clamp_outliers_keeping_range(data: &[f32], dims: [usize; 3]) -> Clamp {
+    let kept = |robust_range| Clamp {
+        clamped: None,
+        robust_range,
+    };
     // (`f32::min` passes over a NaN; a NaN or an infinity is the
     // segmentation's to refuse, unclamped)
     let (min, max) = data
@@ -50,19 +74,20 @@ pub fn clamp_outliers(data: &[f32], dims: [usize; 3]) -> Option<(Vec<f32>, Outli
             (lo.min(v), hi.max(v))
         });
     if !(min.is_finite() && max.is_finite()) {
-        return None;
+        return kept(None);
     }
-    let (low, high) = robust_range(data, (f64::from(min), f64::from(max)), MAX_SAMPLES);
+    let range = robust_range(data, (f64::from(min), f64::from(max)), MAX_SAMPLES);
+    let (low, high) = range;
     let span = high - low;
     let clamp = ((low - span) as f32, (high + span) as f32);
     let inside = min >= clamp.0 && max <= clamp.1;
     if span.is_nan() || span <= 0.0 || inside {
-        return None;
+        return kept(Some(range));
     }
     let beyond = |v: f32| v < clamp.0 || v > clamp.1;
     let isolated = isolated_groups(data, dims, beyond);
     if isolated.is_empty() {
-        return None;
+        return kept(Some(range));
     }
     let mut clamped = data.to_vec();
     for &i in &isolated {
@@ -78,7 +103,10 @@ pub fn clamp_outliers(data: &[f32], dims: [usize; 3]) -> Option<(Vec<f32>, Outli
         clamp,
         extremes,
     };
-    Some((clamped, outliers))
+    Clamp {
+        clamped: Some((clamped, outliers)),
+        robust_range: None,
+    }
 }
 
 /// The samples `beyond` selects that lie in face-connected groups of at
@@ -120,6 +148,20 @@ mod tests {
                 level + 0.0002 * ((i * 7919 % 11) as f32 / 5.0 - 1.0)
             })
             .collect()
+    }
+
+    /// Where the clamp leaves the data as they are, the robust range it
+    /// keeps is the one the intensity figures select, to the bit.
+    #[test]
+    fn the_kept_range_is_the_intensity_figures_range() {
+        use crate::segment::image::ImageView;
+        use crate::segment::intensity::IntensityStats;
+        let data = three_levels();
+        let clamp = clamp_outliers_keeping_range(&data, [100, 100, 1]);
+        assert!(clamp.clamped.is_none());
+        let view = ImageView::new_2d(100, 100, &data).unwrap();
+        let given = IntensityStats::of(&view.with_robust_range(clamp.robust_range.unwrap()));
+        assert_eq!(given, IntensityStats::of(&view));
     }
 
     #[test]

@@ -87,10 +87,7 @@ impl ForceImage {
     /// from an image of this size, else `image` itself.
     pub fn view<'s>(&'s self, image: &ImageView<'s>) -> ImageView<'s> {
         if self.smoothed.len() == image.data.len() {
-            ImageView {
-                data: &self.smoothed,
-                ..*image
-            }
+            image.with_data(&self.smoothed)
         } else {
             *image
         }

@@ -99,11 +99,7 @@ impl EdgeMap {
     }
 
     fn view<'s>(&self, data: &'s [f32]) -> ImageView<'s> {
-        ImageView {
-            dims: self.dims,
-            data,
-            spacing: [1.0; 3],
-        }
+        ImageView::new_3d(self.dims, data).expect("the potential has the image's size")
     }
 }
 
