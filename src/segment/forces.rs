@@ -136,9 +136,8 @@ pub struct ForceField<K: Dim> {
     sampled: FacetSamples<K::Point>,
     /// Vertices the boundary Laplacian acts on (on the interface, off the border).
     active: Vec<u32>,
-    /// Per interface vertex (as `acc`), per-phase neighbour sums of the
-    /// boundary Laplacian.
-    slot_sums: Vec<[K::Point; MAXP]>,
+    /// The boundary Laplacian's neighbours ([`BoundaryNeighbours`]).
+    neighbours: BoundaryNeighbours,
     scratch: Vec<K::Point>,
     classify: ClassifyScratch,
     /// Total measure of the interface (length in 2D), from the last computation.
@@ -160,7 +159,7 @@ impl<K: Raster> ForceField<K> {
             facets: Vec::new(),
             sampled: FacetSamples::default(),
             active: Vec::new(),
-            slot_sums: Vec::new(),
+            neighbours: BoundaryNeighbours::default(),
             scratch: Vec::new(),
             classify: ClassifyScratch::default(),
             interface_measure: 0.0,
@@ -427,6 +426,8 @@ impl<K: Raster> ForceField<K> {
     /// boundary Laplacian applied once and twice to the positions.
     fn smoothing_directions(&mut self, complex: &Complex<K>) {
         self.fill_facet_slots();
+        self.neighbours
+            .list(&self.facets, &self.acc_of, self.acc.len(), K::N);
         self.active.clear();
         for (i, &kind) in self.kinds.iter().enumerate() {
             if kind != ForceKind::Off && !complex.class(VertexId(i as u32)).on_boundary() {
@@ -506,36 +507,22 @@ impl<K: Raster> ForceField<K> {
     /// average of `input` over its neighbours along that phase's boundary,
     /// minus its own value). Applied to the positions it is the umbrella `ΔX`
     /// of the elasticity term; applied to the umbrella, minus the bending
-    /// direction. Written into `out` at those vertices only.
-    fn boundary_laplacian(&mut self, input: impl Fn(usize) -> K::Point, out: &mut [K::Point]) {
-        let nf = K::N;
-        self.slot_sums.clear();
-        self.slot_sums
-            .resize(self.acc.len(), [K::Point::zero(); MAXP]);
-        for f in &self.facets {
-            for p in 0..nf {
-                let Some(sums) = self
-                    .slot_sums
-                    .get_mut(self.acc_of[f.corners[p].index()] as usize)
-                else {
-                    continue;
-                };
-                for q in (0..nf).filter(|&q| q != p) {
-                    let x = input(f.corners[q].index());
-                    for sl in f.slots[p].iter().flatten() {
-                        sums[*sl as usize] += x;
-                    }
-                }
-            }
-        }
+    /// direction. Written into `out` at those vertices only. Each phase's
+    /// neighbours are summed in the order the facets list them
+    /// ([`BoundaryNeighbours`]).
+    fn boundary_laplacian(&self, input: impl Fn(usize) -> K::Point, out: &mut [K::Point]) {
         for &i in &self.active {
             let i = i as usize;
             let a = self.acc_of[i] as usize;
-            let (acc, sums, x) = (&self.acc[a], &self.slot_sums[a], input(i));
+            let (acc, x) = (&self.acc[a], input(i));
             let mut lap = K::Point::zero();
             let mut m = 0.0;
-            for (&sum, &count) in sums.iter().zip(&acc.ncnt).take(acc.np) {
+            for (sl, &count) in acc.ncnt.iter().enumerate().take(acc.np) {
                 if count > 0.0 {
+                    let mut sum = K::Point::zero();
+                    for &q in self.neighbours.of(a, sl) {
+                        sum += input(q as usize);
+                    }
                     lap += sum * (1.0 / count) - x;
                     m += 1.0;
                 }
@@ -571,6 +558,76 @@ impl<K: Raster> ForceField<K> {
         out.clear();
         out.resize(input.len(), K::Point::zero());
         self.boundary_laplacian(|i| input[i], out);
+    }
+}
+
+/// The neighbours of every interface vertex along each phase's boundary,
+/// for the boundary Laplacian, listed once per force computation (the
+/// Laplacian runs a dozen times per iteration, on the same facets): the
+/// other corners of each facet at the vertex, under the slots of the
+/// facet's two phases, in the facets' order, so that each slot's sum adds
+/// the same terms in the same order as a pass over the facets would.
+#[derive(Clone, Debug, Default)]
+struct BoundaryNeighbours {
+    /// Where the list of (interface vertex `a`, slot `sl`) starts, at
+    /// `a·MAXP + sl` (and ends, at the next entry).
+    starts: Vec<u32>,
+    /// The neighbours' vertex indices, list after list.
+    list: Vec<u32>,
+    /// Scratch: the next place of each list while it is filled.
+    cursor: Vec<u32>,
+}
+
+impl BoundaryNeighbours {
+    /// Lists the neighbours along `facets` (their slots filled) of the
+    /// `vertices` interface vertices (`acc_of`: a vertex's index among
+    /// them), `nf` corners per facet.
+    fn list(&mut self, facets: &[Facet], acc_of: &[u32], vertices: usize, nf: usize) {
+        self.starts.clear();
+        self.starts.resize(vertices * MAXP + 1, 0);
+        Self::each_pair(facets, acc_of, nf, |at, _| self.starts[at + 1] += 1);
+        for k in 1..self.starts.len() {
+            self.starts[k] += self.starts[k - 1];
+        }
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.starts);
+        self.list.clear();
+        self.list
+            .resize(*self.starts.last().unwrap_or(&0) as usize, 0);
+        let (cursor, list) = (&mut self.cursor, &mut self.list);
+        Self::each_pair(facets, acc_of, nf, |at, q| {
+            list[cursor[at] as usize] = q;
+            cursor[at] += 1;
+        });
+    }
+
+    /// Calls `visit(a·MAXP + sl, q)` for every facet (in order), every
+    /// corner `p` with sums (interface vertex `a`), every other corner `q`
+    /// and each slot `sl` of the facet's phases at `p`.
+    fn each_pair(facets: &[Facet], acc_of: &[u32], nf: usize, mut visit: impl FnMut(usize, u32)) {
+        for f in facets {
+            for p in 0..nf {
+                let a = acc_of[f.corners[p].index()];
+                if a == NO_ACC {
+                    continue;
+                }
+                for q in (0..nf).filter(|&q| q != p) {
+                    for sl in f.slots[p].iter().flatten() {
+                        visit(
+                            a as usize * MAXP + *sl as usize,
+                            f.corners[q].index() as u32,
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// The neighbours of interface vertex `a` along the boundary of its
+    /// slot `sl`'s phase.
+    fn of(&self, a: usize, sl: usize) -> &[u32] {
+        let at = a * MAXP + sl;
+        &self.list[self.starts[at] as usize..self.starts[at + 1] as usize]
     }
 }
 
