@@ -32,6 +32,8 @@ pub(crate) struct ForceStage<K: Raster> {
     star: Vec<CellId>,
     /// Per-vertex gains of the step.
     gains: StepGains<K::Point>,
+    /// Scratch: the vertices a smoothing term acts on ([`ForceTerm::support_into`]).
+    support: Vec<u32>,
 }
 
 /// The largest displacement of a force evaluation's destinations, in pixels.
@@ -56,6 +58,7 @@ impl<K: Raster> ForceStage<K> {
             dest: Destinations::new(complex),
             star: Vec::new(),
             gains: StepGains::new(),
+            support: Vec::new(),
         }
     }
 
@@ -157,12 +160,23 @@ impl<K: Raster> ForceStage<K> {
                 continue;
             }
             let k = k / substeps;
+            let support = term.support_into(&mut self.support);
             for sub in 0..substeps as usize {
                 if sub > 0 {
                     term.apply_to(&self.displacement, &mut self.applied);
                 }
-                for ((d, f), a) in self.displacement.iter_mut().zip(buf).zip(&self.applied) {
-                    *d += (*f + *a) * k;
+                if support {
+                    add_sub_step(&mut self.displacement, buf, &self.applied, k, &self.support);
+                } else {
+                    for ((d, f), a) in self.displacement.iter_mut().zip(buf).zip(&self.applied) {
+                        *d += (*f + *a) * k;
+                    }
+                }
+            }
+            if support {
+                // (what a sub-step adds elsewhere, `+0`: a `−0` becomes `+0`)
+                for d in &mut self.displacement {
+                    *d += K::Point::zero();
                 }
             }
         }
@@ -195,5 +209,15 @@ impl<K: Raster> ForceStage<K> {
             }
         }
         reach
+    }
+}
+
+/// One sub-step of a smoothing term, `d += (f + a)·k`, at the vertices
+/// `support` only (where `f`, the term's forces, and `a`, its operator's
+/// output, can be nonzero; the caller adds the `+0` of the others).
+fn add_sub_step<P: Point>(d: &mut [P], f: &[P], a: &[P], k: f64, support: &[u32]) {
+    for &i in support {
+        let i = i as usize;
+        d[i] += (f[i] + a[i]) * k;
     }
 }

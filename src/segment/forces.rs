@@ -533,6 +533,17 @@ impl<K: Raster> ForceField<K> {
         }
     }
 
+    /// Lists into `out` the vertices the smoothing directions and operators
+    /// of the last computation act on (on the interface, off the domain
+    /// border, in increasing id): [`bending`](Self::bending),
+    /// [`stretching`](Self::stretching) and the outputs of
+    /// [`apply_bending`](Self::apply_bending) and
+    /// [`apply_umbrella`](Self::apply_umbrella) are `+0` at every other vertex.
+    pub fn smoothed_vertices_into(&self, out: &mut Vec<u32>) {
+        out.clear();
+        out.extend_from_slice(&self.active);
+    }
+
     /// The bending operator `X ↦ −Δ²X` of the last computation applied to a
     /// displacement field (`out` is overwritten at the vertices it acts on
     /// and zeroed elsewhere). The bending direction is linear in the

@@ -282,6 +282,16 @@ pub trait ForceTerm<K: Raster>: AsAny + Send {
     fn apply_to(&mut self, _input: &[K::Point], _out: &mut Vec<K::Point>) -> bool {
         false
     }
+
+    /// The vertices where this term's forces (as of the last
+    /// [`add_forces`](Self::add_forces)) and the output of
+    /// [`apply_to`](Self::apply_to) can be nonzero, listed into `out`
+    /// (cleared first); elsewhere both are exactly `+0`. Returns false
+    /// (the default) where the term does not say: any vertex. The driver
+    /// then adds a smoothing term's sub-steps at those vertices only.
+    fn support_into(&mut self, _out: &mut Vec<u32>) -> bool {
+        false
+    }
 }
 
 /// A rule that changes cell labels (the paper's label flips, section III.C).

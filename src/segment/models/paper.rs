@@ -267,6 +267,11 @@ impl<K: Raster> ForceTerm<K> for Rigidity<K> {
         self.field.lock().field.apply_bending(input, out);
         true
     }
+
+    fn support_into(&mut self, out: &mut Vec<u32>) -> bool {
+        self.field.lock().field.smoothed_vertices_into(out);
+        true
+    }
 }
 
 /// The elasticity term of eq. (2): the umbrella `ΔX` along each phase
@@ -312,6 +317,11 @@ impl<K: Raster> ForceTerm<K> for Elasticity<K> {
 
     fn apply_to(&mut self, input: &[K::Point], out: &mut Vec<K::Point>) -> bool {
         self.field.lock().field.apply_umbrella(input, out);
+        true
+    }
+
+    fn support_into(&mut self, out: &mut Vec<u32>) -> bool {
+        self.field.lock().field.smoothed_vertices_into(out);
         true
     }
 }
