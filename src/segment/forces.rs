@@ -426,14 +426,16 @@ impl<K: Raster> ForceField<K> {
     /// boundary Laplacian applied once and twice to the positions.
     fn smoothing_directions(&mut self, complex: &Complex<K>) {
         self.fill_facet_slots();
-        self.neighbours
-            .list(&self.facets, &self.acc_of, self.acc.len(), K::N);
         self.active.clear();
         for (i, &kind) in self.kinds.iter().enumerate() {
             if kind != ForceKind::Off && !complex.class(VertexId(i as u32)).on_boundary() {
                 self.active.push(i as u32);
             }
         }
+        self.neighbours
+            .list(&self.facets, &self.acc_of, self.acc.len(), K::N);
+        self.neighbours
+            .stencils(&self.active, &self.acc_of, &self.acc);
         let mut umbrella = std::mem::take(&mut self.stretching);
         self.boundary_laplacian(|i| complex.position(VertexId(i as u32)), &mut umbrella);
         let mut bending = std::mem::take(&mut self.bending);
@@ -511,25 +513,22 @@ impl<K: Raster> ForceField<K> {
     /// neighbours are summed in the order the facets list them
     /// ([`BoundaryNeighbours`]).
     fn boundary_laplacian(&self, input: impl Fn(usize) -> K::Point, out: &mut [K::Point]) {
-        for &i in &self.active {
-            let i = i as usize;
-            let a = self.acc_of[i] as usize;
-            let (acc, x) = (&self.acc[a], input(i));
+        let nb = &self.neighbours;
+        for st in &nb.stencils {
+            let x = input(st.vertex as usize);
             let mut lap = K::Point::zero();
-            let mut m = 0.0;
-            for (sl, &count) in acc.ncnt.iter().enumerate().take(acc.np) {
-                if count > 0.0 {
-                    let mut sum = K::Point::zero();
-                    for &q in self.neighbours.of(a, sl) {
+            let mut sum = K::Point::zero();
+            for t in &nb.terms[st.first as usize..(st.first + st.terms) as usize] {
+                // (a repeated list has the sum of the term before)
+                if !t.repeats {
+                    sum = K::Point::zero();
+                    for &q in &nb.list[t.start as usize..t.end as usize] {
                         sum += input(q as usize);
                     }
-                    lap += sum * (1.0 / count) - x;
-                    m += 1.0;
                 }
+                lap += sum * t.inv_count - x;
             }
-            if m > 0.0 {
-                out[i] = lap * (1.0 / m);
-            }
+            out[st.vertex as usize] = lap * st.inv_terms;
         }
     }
 
@@ -587,6 +586,32 @@ struct BoundaryNeighbours {
     list: Vec<u32>,
     /// Scratch: the next place of each list while it is filled.
     cursor: Vec<u32>,
+    /// The Laplacian of each active vertex with a neighbour, in order.
+    stencils: Vec<Stencil>,
+    /// Their phases' terms, stencil after stencil.
+    terms: Vec<SlotTerm>,
+}
+
+/// The boundary Laplacian at one vertex: its terms (`first..first +
+/// terms` in [`BoundaryNeighbours::terms`]) and 1 / their number.
+#[derive(Clone, Copy, Debug)]
+struct Stencil {
+    vertex: u32,
+    first: u32,
+    terms: u32,
+    inv_terms: f64,
+}
+
+/// One phase's term of a vertex's boundary Laplacian: its neighbours
+/// (`start..end` in [`BoundaryNeighbours::list`]), 1 / their count, and
+/// whether they are the term before's (a vertex between two phases has the
+/// same neighbours along both: their sum is taken once, the same bits).
+#[derive(Clone, Copy, Debug)]
+struct SlotTerm {
+    start: u32,
+    end: u32,
+    inv_count: f64,
+    repeats: bool,
 }
 
 impl BoundaryNeighbours {
@@ -612,6 +637,46 @@ impl BoundaryNeighbours {
         });
     }
 
+    /// Writes the stencil of each vertex of `active` (its index among the
+    /// interface vertices in `acc_of`, its sums in `acc`; after
+    /// [`list`](Self::list)): a term per phase with boundary neighbours,
+    /// `1 / count` of them; a vertex without any gets no stencil (the
+    /// Laplacian leaves it).
+    fn stencils<P: Point>(&mut self, active: &[u32], acc_of: &[u32], acc: &[Acc<P>]) {
+        self.stencils.clear();
+        self.terms.clear();
+        for &i in active {
+            let a = acc_of[i as usize] as usize;
+            let first = self.terms.len();
+            for (sl, &count) in acc[a].ncnt.iter().enumerate().take(acc[a].np) {
+                if count > 0.0 {
+                    let at = a * MAXP + sl;
+                    let (start, end) = (self.starts[at], self.starts[at + 1]);
+                    let repeats = self.terms.len() > first && {
+                        let t = self.terms[self.terms.len() - 1];
+                        self.list[t.start as usize..t.end as usize]
+                            == self.list[start as usize..end as usize]
+                    };
+                    self.terms.push(SlotTerm {
+                        start,
+                        end,
+                        inv_count: 1.0 / count,
+                        repeats,
+                    });
+                }
+            }
+            let terms = self.terms.len() - first;
+            if terms > 0 {
+                self.stencils.push(Stencil {
+                    vertex: i,
+                    first: first as u32,
+                    terms: terms as u32,
+                    inv_terms: 1.0 / terms as f64,
+                });
+            }
+        }
+    }
+
     /// Calls `visit(a·MAXP + sl, q)` for every facet (in order), every
     /// corner `p` with sums (interface vertex `a`), every other corner `q`
     /// and each slot `sl` of the facet's phases at `p`.
@@ -632,13 +697,6 @@ impl BoundaryNeighbours {
                 }
             }
         }
-    }
-
-    /// The neighbours of interface vertex `a` along the boundary of its
-    /// slot `sl`'s phase.
-    fn of(&self, a: usize, sl: usize) -> &[u32] {
-        let at = a * MAXP + sl;
-        &self.list[self.starts[at] as usize..self.starts[at + 1] as usize]
     }
 }
 
