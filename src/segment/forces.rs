@@ -124,6 +124,10 @@ pub struct ForceField<K: Dim> {
     /// The sums of the interface vertices, in increasing vertex id: only
     /// they have any, so the memory follows the interface, not the mesh.
     acc: Vec<Acc<K::Point>>,
+    /// The interface vertices (`kinds` not `Off`), in increasing id: the
+    /// vertex of each entry of `acc`, so that the later stages pass over
+    /// the interface rather than over every vertex.
+    interface: Vec<u32>,
     /// External (region) force per vertex id, dimensionless for eq. (6).
     pub external: Vec<K::Point>,
     /// Bending term `−Δ(ΔX)` per vertex id (pixels), the direction of the
@@ -153,6 +157,7 @@ impl<K: Raster> ForceField<K> {
             kinds: Vec::new(),
             acc_of: Vec::new(),
             acc: Vec::new(),
+            interface: Vec::new(),
             external: Vec::new(),
             bending: Vec::new(),
             stretching: Vec::new(),
@@ -206,6 +211,7 @@ impl<K: Raster> ForceField<K> {
             share: 0.0,
         };
         self.acc.clear();
+        self.interface.clear();
         self.acc_of.clear();
         self.acc_of.resize(nv, NO_ACC);
         for buf in [&mut self.external, &mut self.bending, &mut self.stretching] {
@@ -241,6 +247,7 @@ impl<K: Raster> ForceField<K> {
             }
             self.acc_of[i] = self.acc.len() as u32;
             self.acc.push(empty);
+            self.interface.push(i as u32);
             match kind {
                 ForceKind::TripleJunction => {
                     self.junctions.0 += 1;
@@ -427,9 +434,9 @@ impl<K: Raster> ForceField<K> {
     fn smoothing_directions(&mut self, complex: &Complex<K>) {
         self.fill_facet_slots();
         self.active.clear();
-        for (i, &kind) in self.kinds.iter().enumerate() {
-            if kind != ForceKind::Off && !complex.class(VertexId(i as u32)).on_boundary() {
-                self.active.push(i as u32);
+        for &i in &self.interface {
+            if !complex.class(VertexId(i)).on_boundary() {
+                self.active.push(i);
             }
         }
         self.neighbours
@@ -459,11 +466,8 @@ impl<K: Raster> ForceField<K> {
     /// region force over its share of the interface (eq. 6), or at a triple
     /// junction the eq. (7) weights along the phases' outward normals.
     fn resolve_external(&mut self, junction: JunctionForce) {
-        for i in 0..self.kinds.len() {
-            if self.kinds[i] == ForceKind::Off {
-                continue;
-            }
-            let acc = &self.acc[self.acc_of[i] as usize];
+        for (acc, &i) in self.acc.iter().zip(&self.interface) {
+            let i = i as usize;
             let mut f = K::Point::zero();
             match self.kinds[i] {
                 ForceKind::Interface if acc.share > 0.0 => f += acc.ext * (1.0 / acc.share),
