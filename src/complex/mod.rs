@@ -406,16 +406,24 @@ impl<K: Dim> Complex<K> {
     /// Moves a vertex without any check. Callers must keep every cell positive
     /// ([`Complex::move_towards`](crate::ops) does).
     pub(crate) fn set_position(&mut self, v: VertexId, p: K::Point) {
+        let mut star = self.take_list();
+        self.star_into(v, &mut star);
+        self.set_position_in_star(v, p, &star);
+        self.give_back(star);
+    }
+
+    /// [`set_position`](Self::set_position) for a caller that holds the
+    /// cells of `v`'s star (`star`, in any order): the vertex move and the
+    /// smoothing move have just searched it to test the move, and a second
+    /// search would find the same cells.
+    pub(crate) fn set_position_in_star(&mut self, v: VertexId, p: K::Point, star: &[CellId]) {
         self.positions[v.index()] = p;
         self.book.move_clock += 1;
         self.book.moved_at[v.index()] = self.book.move_clock;
         // Every vertex sharing a cell with `v` has a changed star.
-        let mut star = self.take_list();
-        self.star_into(v, &mut star);
-        for &c in &star {
+        for &c in star {
             self.mark_star_changed(c);
         }
-        self.give_back(star);
     }
 
     /// An empty list of cells from the spares (a new one if none is left);

@@ -76,7 +76,7 @@ impl<K: Dim> Complex<K> {
                 p + r * (step / dist)
             };
             if self.star_positive_at(star, v, q) {
-                self.set_position(v, q);
+                self.set_position_in_star(v, q, star);
                 return if step >= dist {
                     MoveOutcome::Arrived
                 } else {

@@ -66,19 +66,24 @@ impl<K: Dim> Complex<K> {
         if self.skips_smoothing(v, memo) {
             return false;
         }
-        let target = self.smoothing_target(v, scratch);
-        self.apply_smoothing(v, target, memo)
+        // (the recorded qualities are read only about this complex as it
+        // is numbered now)
+        memo.qualities.sync(self);
+        let target = self.smoothing_target(v, scratch, memo);
+        self.apply_smoothing(v, target, &scratch.star, memo)
     }
 
-    /// Moves `v` to `target` if there is one, and records the verdict.
+    /// Moves `v` to `target` if there is one, and records the verdict;
+    /// `star` holds the cells of `v`'s star.
     fn apply_smoothing(
         &mut self,
         v: VertexId,
         target: Option<K::Point>,
+        star: &[CellId],
         memo: &mut ImproveMemo,
     ) -> bool {
         if let Some(p) = target {
-            self.set_position(v, p);
+            self.set_position_in_star(v, p, star);
         }
         memo.set_kept(self, v, target.is_none());
         target.is_some()
@@ -105,7 +110,12 @@ impl<K: Dim> Complex<K> {
 
     /// Where smoothing moves `v`, if anywhere (see
     /// [`smooth_vertex`](Self::smooth_vertex)); reads only.
-    fn smoothing_target(&self, v: VertexId, scratch: &mut SmoothScratch<K>) -> Option<K::Point> {
+    fn smoothing_target(
+        &self,
+        v: VertexId,
+        scratch: &mut SmoothScratch<K>,
+        memo: &ImproveMemo,
+    ) -> Option<K::Point> {
         self.star_into(v, &mut scratch.star);
         scratch.corners.clear();
         for &c in &scratch.star {
@@ -113,15 +123,28 @@ impl<K: Dim> Complex<K> {
                 .corners
                 .push((self.cell_points(c), self.local_index(c, v)));
         }
-        self.smooth_star(v, &scratch.corners)
+        let star_now = || {
+            scratch.star.iter().zip(&scratch.corners).map(|(&c, (pts, _))| {
+                memo.qualities
+                    .current(self, c)
+                    .unwrap_or_else(|| K::quality_oriented(&pts[..K::NV]))
+            })
+        };
+        self.smooth_star(v, &scratch.corners, star_now)
     }
 
     /// The smoothing move of `v` with its star's corners: see
     /// [`Complex::smooth_vertex`].
-    fn smooth_star(
+    ///
+    /// `qualities_now` gives the qualities of the star's cells as they
+    /// are, in its order: those the search for poor tets recorded and whose
+    /// corners have not moved since are read rather than computed (the same
+    /// bits: the same formula of the same corners).
+    fn smooth_star<Q: Iterator<Item = f64>>(
         &self,
         v: VertexId,
         star: &[([K::Point; 4], Option<usize>)],
+        qualities_now: impl FnOnce() -> Q,
     ) -> Option<K::Point> {
         // A good star is left without computing the qualities. (In 3D
         // hardly any is: on the brain phantom at `--size 120` none of the
@@ -169,9 +192,7 @@ impl<K: Dim> Complex<K> {
             return None;
         }
         // (the star's quality now, measured only for a move worth testing)
-        let before = at(p)
-            .map(|pts| K::quality_oriented(&pts[..K::NV]))
-            .fold(1.0, f64::min);
+        let before = qualities_now().fold(1.0, f64::min);
         if !at(target).all(|pts| K::quality_oriented_at_least(&pts[..K::NV], before)) {
             return None;
         }
