@@ -34,6 +34,10 @@ pub(super) struct Bookkeeping {
     /// Per vertex: the value of `move_clock` when its star last changed (a
     /// corner of it moved, a cell of it was created or removed).
     pub(super) star_changed_at: Vec<u64>,
+    /// Per vertex: the value of `move_clock` when a cell of its star was
+    /// last created or removed (moves leave it: a star search from the
+    /// vertex finds the same cells in the same order while it stands).
+    pub(super) cells_changed_at: Vec<u64>,
     /// Counts vertex moves and creations and cell replacements.
     pub(super) move_clock: u64,
     /// Cleared lists that operations borrow
@@ -52,6 +56,7 @@ impl Bookkeeping {
             identity: fresh_identity(),
             moved_at: vec![0; vertices],
             star_changed_at: vec![0; vertices],
+            cells_changed_at: vec![0; vertices],
             ..Self::default()
         }
     }
@@ -80,6 +85,7 @@ impl Clone for Bookkeeping {
             renumbering_held: self.renumbering_held,
             moved_at: self.moved_at.clone(),
             star_changed_at: self.star_changed_at.clone(),
+            cells_changed_at: self.cells_changed_at.clone(),
             move_clock: self.move_clock,
             spare_lists: self.spare_lists.clone(),
             relabels: self.relabels,

@@ -108,6 +108,7 @@ impl<K: Dim> Complex<K> {
         self.book.move_clock += 1;
         self.book.moved_at.push(self.book.move_clock);
         self.book.star_changed_at.push(self.book.move_clock);
+        self.book.cells_changed_at.push(self.book.move_clock);
         self.vertex_cell.push(None);
         self.classes.push(super::VertexClass {
             kind: super::VertexKind::Interior,
@@ -260,7 +261,7 @@ impl<K: Dim> Complex<K> {
         self.book.move_clock += 1;
         for &c in old {
             self.alive[c.index()] = false;
-            self.mark_star_changed(c);
+            self.mark_star_cells_changed(c);
         }
         self.live_cells -= old.len();
         for &(j, i, pos) in &external {
@@ -289,7 +290,7 @@ impl<K: Dim> Complex<K> {
             self.slots.push(Slot::new(*cell, links[j]));
             self.labels.push(*label);
             self.alive.push(true);
-            self.mark_star_changed(id);
+            self.mark_star_cells_changed(id);
             for &v in cell.as_ref() {
                 if self.vertex_cell[v.index()].is_none() {
                     self.live_vertices += 1;

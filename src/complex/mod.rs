@@ -448,6 +448,18 @@ impl<K: Dim> Complex<K> {
         }
     }
 
+    /// Records that the stars of `c`'s corners changed now, by a cell
+    /// created or removed (see [`cells_changed_at`](Self::cells_changed_at)).
+    #[inline]
+    pub(crate) fn mark_star_cells_changed(&mut self, c: CellId) {
+        self.mark_star_changed(c);
+        let clock = self.book.move_clock;
+        for k in 0..K::NV {
+            let w = self.slots[c.index()].corners.as_ref()[k];
+            self.book.cells_changed_at[w.index()] = clock;
+        }
+    }
+
     /// A counter that advances with every vertex move or creation and every
     /// replacement of cells: a result computed from positions at clock `t`
     /// still holds for the vertices whose [`moved_at`](Self::moved_at) is at
@@ -470,6 +482,17 @@ impl<K: Dim> Complex<K> {
     #[inline]
     pub fn star_changed_at(&self, v: VertexId) -> u64 {
         self.book.star_changed_at[v.index()]
+    }
+
+    /// The [`move_clock`](Self::move_clock) when a cell around `v` was last
+    /// created or removed (moves do not count): while it is at most `t`,
+    /// the star of `v` holds the cells, and a star search from `v` finds
+    /// them in the order, that it did at `t` (the search reads only those
+    /// cells, their neighbours across facets through `v`, and the stored
+    /// cell of `v`, which changes only with a cell around it).
+    #[inline]
+    pub fn cells_changed_at(&self, v: VertexId) -> u64 {
+        self.book.cells_changed_at[v.index()]
     }
 
     /// The [`move_clock`](Self::move_clock) when `v` was created or last moved.
@@ -579,6 +602,7 @@ impl<K: Dim> Complex<K> {
                 self.positions[k] = self.positions[i];
                 self.book.moved_at[k] = self.book.moved_at[i];
                 self.book.star_changed_at[k] = self.book.star_changed_at[i];
+                self.book.cells_changed_at[k] = self.book.cells_changed_at[i];
                 self.classes[k] = self.classes[i];
                 self.vertex_cell[k] = self.vertex_cell[i].and_then(|c| cmap[c.index()]);
             }
@@ -586,6 +610,7 @@ impl<K: Dim> Complex<K> {
         self.positions.truncate(n);
         self.book.moved_at.truncate(n);
         self.book.star_changed_at.truncate(n);
+        self.book.cells_changed_at.truncate(n);
         self.classes.truncate(n);
         self.vertex_cell.truncate(n);
     }

@@ -138,6 +138,7 @@ impl<K: Dim> Complex<K> {
         self.classes = gather_from(&self.classes, order);
         self.book.moved_at = gather_from(&self.book.moved_at, order);
         self.book.star_changed_at = gather_from(&self.book.star_changed_at, order);
+        self.book.cells_changed_at = gather_from(&self.book.cells_changed_at, order);
         self.vertex_cell = gather_mapped(&self.vertex_cell, order, |c| {
             c.map(|c| CellId::new(new_cell[c.index()]))
         });
@@ -231,6 +232,7 @@ mod tests {
             assert_eq!(c.class(w), before.class(v));
             assert_eq!(c.moved_at(w), before.moved_at(v));
             assert_eq!(c.star_changed_at(w), before.star_changed_at(v));
+            assert_eq!(c.cells_changed_at(w), before.cells_changed_at(v));
         }
         let mut renumbered = 0;
         for x in before.cell_ids() {

@@ -1,7 +1,7 @@
 //! Mesh improvement between moves: smoothing, flips, removal of degenerate cells.
 
 use super::splits_made::SplitsMade;
-use super::workspace::{RegionBuffers, WalkScratch};
+use super::workspace::{RegionBuffers, SeedStars, WalkScratch};
 use super::{DscParams, DscWorkspace, SizingField};
 use crate::complex::{CellId, Complex, Rejection, VertexId};
 use crate::dim::{Dim, D2, D3};
@@ -89,7 +89,9 @@ impl<'s> Region<'s> {
 
     /// The cells around `seeds`, collected into `buffers` (given back by
     /// [`into_buffers`](Self::into_buffers)).
-    pub(crate) fn around_in(seeds: &'s [VertexId], buffers: RegionBuffers) -> Self {
+    pub(crate) fn around_in(seeds: &'s [VertexId], mut buffers: RegionBuffers) -> Self {
+        // (stars kept are of other seeds)
+        buffers.stars.clear();
         Region {
             seeds: Some(seeds),
             buffers,
@@ -111,9 +113,7 @@ impl<'s> Region<'s> {
         if !self.current {
             let b = &mut self.buffers;
             match self.seeds {
-                Some(seeds) => {
-                    complex.region_cells_with(seeds, &mut b.cells, &mut b.marks, &mut b.star)
-                }
+                Some(seeds) => complex.collect_region(seeds, b),
                 None => {
                     b.cells.clear();
                     b.cells.extend(complex.cell_ids());
@@ -440,10 +440,10 @@ impl<K: Connectivity> Complex<K> {
         });
     }
 
-    /// Hands `take` the star of every live vertex of `seeds`, in seed order.
-    /// In 3D many seeds have their stars searched on rayon's threads first,
-    /// a chunk of seeds each: the same stars in the same order. `star` is
-    /// scratch.
+    /// Hands `take` the star of every vertex of `seeds`, in seed order
+    /// (empty for a dead one). In 3D many seeds have their stars searched
+    /// on rayon's threads first, a chunk of seeds each: the same stars in
+    /// the same order. `star` is scratch.
     fn for_each_star(
         &self,
         seeds: &[VertexId],
@@ -451,27 +451,91 @@ impl<K: Connectivity> Complex<K> {
         mut take: impl FnMut(&[CellId]),
     ) {
         if K::N == 3 && seeds.len() >= PARALLEL_REGION_FROM && rayon::current_num_threads() > 1 {
-            let stars: Vec<Vec<CellId>> = seeds
+            let stars: Vec<SeedStars> = seeds
                 .par_chunks(REGION_CHUNK)
                 .map_init(Vec::new, |star, chunk| {
-                    let mut cells = Vec::with_capacity(chunk.len() * CELLS_PER_STAR_3D);
-                    for &v in chunk.iter().filter(|&&v| self.is_vertex_alive(v)) {
-                        self.star_into(v, star);
-                        cells.extend_from_slice(star);
+                    let mut stars = SeedStars::default();
+                    stars.cells.reserve(chunk.len() * CELLS_PER_STAR_3D);
+                    for &v in chunk {
+                        self.live_star_into(v, star);
+                        stars.push(star);
                     }
-                    cells
+                    stars
                 })
                 .collect();
-            stars.iter().for_each(|cells| take(cells));
+            for chunk in &stars {
+                (0..chunk.ends.len()).for_each(|i| take(chunk.star(i)));
+            }
             return;
         }
         for &v in seeds {
-            if !self.is_vertex_alive(v) {
-                continue;
-            }
-            self.star_into(v, star);
+            self.live_star_into(v, star);
             take(star);
         }
+    }
+
+    /// The star of `v` into `star`; empty if `v` is dead.
+    fn live_star_into(&self, v: VertexId, star: &mut Vec<CellId>) {
+        if self.is_vertex_alive(v) {
+            self.star_into(v, star);
+        } else {
+            star.clear();
+        }
+    }
+
+    /// The cells of a region around `seeds` into `b.cells`, as
+    /// [`region_cells_with`](Self::region_cells_with) collects them. In 3D,
+    /// where the region is collected star by star, the seeds' stars are
+    /// kept (`b.stars`), and a later collection of the same region (after
+    /// flips or collapses changed some cells) searches only the stars of
+    /// the seeds around which a cell was created or removed since: the
+    /// others would be found again cell for cell.
+    fn collect_region(&self, seeds: &[VertexId], b: &mut RegionBuffers) {
+        if K::N != 3 || scan_for_region(seeds.len(), self.cell_count()) {
+            b.stars.clear();
+            self.region_cells_with(seeds, &mut b.cells, &mut b.marks, &mut b.star);
+            return;
+        }
+        let now = (self.move_clock(), self.compactions());
+        match b.stars.at {
+            Some((clock, compactions)) if compactions == now.1 => {
+                self.renew_seed_stars(seeds, clock, b);
+            }
+            _ => {
+                b.stars.clear();
+                let stars = &mut b.stars;
+                self.for_each_star(seeds, &mut b.star, |star| stars.push(star));
+            }
+        }
+        b.stars.at = Some(now);
+        b.cells.clear();
+        b.marks.clear();
+        b.marks.resize(self.cell_capacity(), false);
+        for &c in &b.stars.cells {
+            if !b.marks[c.index()] {
+                b.marks[c.index()] = true;
+                b.cells.push(c);
+            }
+        }
+    }
+
+    /// `b.stars`, current at move clock `clock`, made current now: the
+    /// star of each seed around which a cell was created or removed since
+    /// is searched again, the others are kept.
+    fn renew_seed_stars(&self, seeds: &[VertexId], clock: u64, b: &mut RegionBuffers) {
+        let (old, new) = (&b.stars, &mut b.spare_stars);
+        new.clear();
+        for (i, &v) in seeds.iter().enumerate() {
+            if !self.is_vertex_alive(v) {
+                new.push(&[]);
+            } else if self.cells_changed_at(v) <= clock {
+                new.push(old.star(i));
+            } else {
+                self.star_into(v, &mut b.star);
+                new.push(&b.star);
+            }
+        }
+        std::mem::swap(&mut b.stars, &mut b.spare_stars);
     }
 
     /// Whether a cell sharing a vertex with `cells` (a cell of the region

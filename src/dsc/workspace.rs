@@ -161,12 +161,53 @@ impl CheckedCells {
 }
 
 /// The buffers of a [`Region`](super::Region): its cells, their marks by
-/// cell id, and a star.
+/// cell id, a star, and (3D, collected star by star) the seeds' stars.
 #[derive(Debug, Default)]
 pub(crate) struct RegionBuffers {
     pub(super) cells: Vec<CellId>,
     pub(super) marks: Vec<bool>,
     pub(super) star: Vec<CellId>,
+    pub(super) stars: SeedStars,
+    /// The next [`SeedStars`] while it is being built.
+    pub(super) spare_stars: SeedStars,
+}
+
+/// The stars of a region's seeds, one after the other in seed order, and
+/// when they were searched: a later collection of the same region searches
+/// again only the seeds a cell around which was created or removed since
+/// ([`Complex::cells_changed_at`](crate::complex::Complex::cells_changed_at)),
+/// and takes the others' stars from here, where a search would find the
+/// same cells in the same order.
+#[derive(Debug, Default)]
+pub(crate) struct SeedStars {
+    /// The stars' cells, seed after seed (none for a dead seed).
+    pub(super) cells: Vec<CellId>,
+    /// Per seed, where its star ends in `cells`.
+    pub(super) ends: Vec<u32>,
+    /// The move clock and the compactions of the complex when the stars
+    /// were current (`None`: nothing kept).
+    pub(super) at: Option<(u64, u64)>,
+}
+
+impl SeedStars {
+    /// Forgets the stars (keeps the capacity).
+    pub(super) fn clear(&mut self) {
+        self.cells.clear();
+        self.ends.clear();
+        self.at = None;
+    }
+
+    /// Appends the next seed's star.
+    pub(super) fn push(&mut self, star: &[CellId]) {
+        self.cells.extend_from_slice(star);
+        self.ends.push(self.cells.len() as u32);
+    }
+
+    /// The star of seed `i`.
+    pub(super) fn star(&self, i: usize) -> &[CellId] {
+        let start = if i == 0 { 0 } else { self.ends[i - 1] as usize };
+        &self.cells[start..self.ends[i] as usize]
+    }
 }
 
 #[cfg(test)]
