@@ -208,9 +208,9 @@ impl<K: Dim> Complex<K> {
     ) -> Option<CellId> {
         out.clear();
         let start = self.vertex_cell[v.index()]?;
-        out.push(start);
         let mut seen = seen::SeenCells::new();
-        seen.insert(start);
+        seen.insert(start, out);
+        out.push(start);
         let mut next = 0;
         while next < out.len() {
             let c = out[next];
@@ -224,8 +224,7 @@ impl<K: Dim> Complex<K> {
                     continue;
                 }
                 if let Some(nb) = *nb {
-                    if !seen.contains(nb, out) {
-                        seen.insert(nb);
+                    if seen.insert(nb, out) {
                         out.push(nb);
                     }
                 }

@@ -6,8 +6,9 @@ use crate::ids::CellId;
 
 /// Slots of the table (a power of two).
 const SLOTS: usize = 128;
-/// The table takes at most this many cells (a load of one half); a larger
-/// star (rare: 3D stars hold 20–30 tets) is answered by scanning the list.
+/// The table takes the first this many cells (a load of at most one half);
+/// a larger star (rare: 3D stars hold 20–30 tets) is answered by scanning
+/// the list.
 const CAPACITY: usize = SLOTS / 2;
 /// An empty slot: no cell has this index (ids are below `u32::MAX`).
 const EMPTY: u32 = u32::MAX;
@@ -15,50 +16,35 @@ const EMPTY: u32 = u32::MAX;
 /// The membership set of one star search.
 pub(super) struct SeenCells {
     slots: [u32; SLOTS],
-    len: usize,
 }
 
 impl SeenCells {
     pub(super) fn new() -> Self {
         SeenCells {
             slots: [EMPTY; SLOTS],
-            len: 0,
         }
     }
 
-    /// Whether `c` was inserted; `list` holds every cell inserted so far, in
-    /// case the table overflowed.
+    /// Records `c` unless it was recorded before; returns whether it is
+    /// new. `list` holds every cell recorded so far, in order (the search's
+    /// output): the table holds its first [`CAPACITY`] cells, and from then
+    /// on the list is scanned. One probe sequence both tests and records.
     #[inline]
-    pub(super) fn contains(&self, c: CellId, list: &[CellId]) -> bool {
-        if self.len >= CAPACITY {
-            return list.contains(&c);
+    pub(super) fn insert(&mut self, c: CellId, list: &[CellId]) -> bool {
+        if list.len() >= CAPACITY {
+            return !list.contains(&c);
         }
         let mut slot = home(c);
         loop {
             match self.slots[slot] {
-                EMPTY => return false,
-                s if s == c.raw() => return true,
+                EMPTY => {
+                    self.slots[slot] = c.raw();
+                    return true;
+                }
+                s if s == c.raw() => return false,
                 _ => slot = (slot + 1) % SLOTS,
             }
         }
-    }
-
-    /// Records `c` (not yet inserted); ignored once the table is full, after
-    /// which [`contains`](Self::contains) scans the list.
-    #[inline]
-    pub(super) fn insert(&mut self, c: CellId) {
-        if self.len >= CAPACITY {
-            return;
-        }
-        self.len += 1;
-        if self.len == CAPACITY {
-            return;
-        }
-        let mut slot = home(c);
-        while self.slots[slot] != EMPTY {
-            slot = (slot + 1) % SLOTS;
-        }
-        self.slots[slot] = c.raw();
     }
 }
 
@@ -78,12 +64,9 @@ mod tests {
         let mut list = Vec::new();
         for i in 0..3 * CAPACITY as u32 {
             let c = CellId::new(i * 7919 % 100_003);
-            assert!(!seen.contains(c, &list));
-            seen.insert(c);
+            assert!(seen.insert(c, &list));
             list.push(c);
-            assert!(seen.contains(c, &list));
-            assert!(list.iter().all(|&d| seen.contains(d, &list)));
-            assert!(!seen.contains(CellId::new(200_000 + i), &list));
+            assert!(list.iter().all(|&d| !seen.insert(d, &list)));
         }
     }
 }
