@@ -124,11 +124,15 @@ impl<K: Dim> Complex<K> {
                 .push((self.cell_points(c), self.local_index(c, v)));
         }
         let star_now = || {
-            scratch.star.iter().zip(&scratch.corners).map(|(&c, (pts, _))| {
-                memo.qualities
-                    .current(self, c)
-                    .unwrap_or_else(|| K::quality_oriented(&pts[..K::NV]))
-            })
+            scratch
+                .star
+                .iter()
+                .zip(&scratch.corners)
+                .map(|(&c, (pts, _))| {
+                    memo.qualities
+                        .current(self, c)
+                        .unwrap_or_else(|| K::quality_oriented(&pts[..K::NV]))
+                })
         };
         self.smooth_star(v, &scratch.corners, star_now)
     }
