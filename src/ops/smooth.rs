@@ -38,6 +38,9 @@ pub struct SmoothScratch<K: Dim> {
     /// Per star cell: its corners and the index of the smoothed vertex
     /// among them (read once, then used by every test of the move).
     corners: Vec<([K::Point; 4], Option<usize>)>,
+    /// The star's qualities computed (not read from the memo) for its
+    /// quality before a move, with their cells, to be recorded (3D).
+    computed: Vec<(CellId, f64)>,
 }
 
 impl<K: Dim> Default for SmoothScratch<K> {
@@ -45,6 +48,7 @@ impl<K: Dim> Default for SmoothScratch<K> {
         SmoothScratch {
             star: Vec::new(),
             corners: Vec::new(),
+            computed: Vec::new(),
         }
     }
 }
@@ -109,46 +113,58 @@ impl<K: Dim> Complex<K> {
     }
 
     /// Where smoothing moves `v`, if anywhere (see
-    /// [`smooth_vertex`](Self::smooth_vertex)); reads only.
+    /// [`smooth_vertex`](Self::smooth_vertex)). Changes no cell or vertex;
+    /// in 3D the qualities it computed are recorded in `memo` (the search
+    /// for poor tets and later passes read them while no corner moves).
     fn smoothing_target(
         &self,
         v: VertexId,
         scratch: &mut SmoothScratch<K>,
-        memo: &ImproveMemo,
+        memo: &mut ImproveMemo,
     ) -> Option<K::Point> {
-        self.star_into(v, &mut scratch.star);
-        scratch.corners.clear();
-        for &c in &scratch.star {
-            scratch
-                .corners
-                .push((self.cell_points(c), self.local_index(c, v)));
+        let SmoothScratch {
+            star,
+            corners,
+            computed,
+        } = scratch;
+        self.star_into(v, star);
+        corners.clear();
+        for &c in star.iter() {
+            corners.push((self.cell_points(c), self.local_index(c, v)));
         }
-        let star_now = || {
-            scratch
-                .star
-                .iter()
-                .zip(&scratch.corners)
-                .map(|(&c, (pts, _))| {
-                    memo.qualities
-                        .current(self, c)
-                        .unwrap_or_else(|| K::quality_oriented(&pts[..K::NV]))
+        computed.clear();
+        let known = &*memo;
+        let worst_now = || {
+            let qualities = star.iter().zip(corners.iter()).map(|(&c, (pts, _))| {
+                known.qualities.current(self, c).unwrap_or_else(|| {
+                    let q = K::quality_oriented(&pts[..K::NV]);
+                    computed.push((c, q));
+                    q
                 })
+            });
+            qualities.fold(1.0, f64::min)
         };
-        self.smooth_star(v, &scratch.corners, star_now)
+        let target = self.smooth_star(v, corners, worst_now);
+        if K::N == 3 {
+            for &(c, q) in computed.iter() {
+                memo.qualities.record(self, c, q);
+            }
+        }
+        target
     }
 
     /// The smoothing move of `v` with its star's corners: see
     /// [`Complex::smooth_vertex`].
     ///
-    /// `qualities_now` gives the qualities of the star's cells as they
-    /// are, in its order: those the search for poor tets recorded and whose
-    /// corners have not moved since are read rather than computed (the same
-    /// bits: the same formula of the same corners).
-    fn smooth_star<Q: Iterator<Item = f64>>(
+    /// `worst_now` gives the smallest quality of the star's cells as they
+    /// are: qualities recorded while no corner has moved since are read
+    /// rather than computed (the same bits: the same formula of the same
+    /// corners).
+    fn smooth_star(
         &self,
         v: VertexId,
         star: &[([K::Point; 4], Option<usize>)],
-        qualities_now: impl FnOnce() -> Q,
+        worst_now: impl FnOnce() -> f64,
     ) -> Option<K::Point> {
         // A good star is left without computing the qualities. (In 3D
         // hardly any is: on the brain phantom at `--size 120` none of the
@@ -196,7 +212,7 @@ impl<K: Dim> Complex<K> {
             return None;
         }
         // (the star's quality now, measured only for a move worth testing)
-        let before = qualities_now().fold(1.0, f64::min);
+        let before = worst_now();
         if !at(target).all(|pts| K::quality_oriented_at_least(&pts[..K::NV], before)) {
             return None;
         }
