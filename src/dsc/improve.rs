@@ -552,10 +552,13 @@ impl<K: Connectivity> Complex<K> {
         walk: &mut WalkScratch,
     ) -> bool {
         self.region_vertices(cells, &mut walk.vertices, &mut walk.vertex_marks);
-        let star_degenerate = |v: VertexId, star: &mut Vec<CellId>| {
+        // (the recorded qualities are read only about this complex as it
+        // is numbered now)
+        memo.qualities.sync(self);
+        let star_degenerate = |v: VertexId, star: &mut Vec<CellId>, memo: &ImproveMemo| {
             self.star_into(v, star);
             star.iter()
-                .any(|&c| self.is_degenerate_sized(c, params, sizing))
+                .any(|&c| self.is_degenerate_remembered(c, params, sizing, memo))
         };
         if walk.vertices.len() < PARALLEL_STARS_FROM || rayon::current_num_threads() < 2 {
             // Neighbouring stars share most of their cells: each is measured
@@ -571,7 +574,7 @@ impl<K: Connectivity> Complex<K> {
                     if walk.checked.contains(c) {
                         continue;
                     }
-                    if self.is_degenerate_sized(c, params, sizing) {
+                    if self.is_degenerate_remembered(c, params, sizing, memo) {
                         return true;
                     }
                     walk.checked.insert(c);
@@ -595,7 +598,7 @@ impl<K: Connectivity> Complex<K> {
         } else {
             walk.degenerate
                 .par_extend(walk.vertices.par_iter().map_init(Vec::new, |star, &v| {
-                    !memo_now.still_sound(self, v) && star_degenerate(v, star)
+                    !memo_now.still_sound(self, v) && star_degenerate(v, star, memo_now)
                 }));
         }
         let mut found = false;
@@ -643,7 +646,7 @@ impl<K: Connectivity> Complex<K> {
                 .filter(|&c| {
                     self.is_alive(c)
                         && self.cell(c).iter().any(|w| judged[w.index()])
-                        && self.is_degenerate_sized(c, params, sizing)
+                        && self.is_degenerate_remembered(c, params, sizing, memo)
                 }),
         );
         let in_a_degenerate_star = &mut walk.star_marks;
@@ -717,23 +720,53 @@ impl<K: Connectivity> Complex<K> {
     /// [`is_degenerate`](Self::is_degenerate) with the measure and length
     /// thresholds taken at the target size `h` of the cell's centroid.
     pub fn is_degenerate_sized(&self, c: CellId, params: &DscParams, sizing: &SizingField) -> bool {
+        self.is_degenerate_known(c, params, sizing, None)
+    }
+
+    /// [`is_degenerate_sized`](Self::is_degenerate_sized) with the
+    /// quality of `c` if it is known (recorded while no corner moved since:
+    /// the same bits as computing it).
+    fn is_degenerate_known(
+        &self,
+        c: CellId,
+        params: &DscParams,
+        sizing: &SizingField,
+        quality: Option<f64>,
+    ) -> bool {
         // (the exact comparison, without the square root of the quality;
         // every test on one read of the corners)
         let pts = self.cell_points(c);
         let pts = &pts[..K::NV];
         let h = sizing.at_cell(pts, params.edge_length);
-        if !K::quality_oriented_at_least(pts, params.degenerate_quality)
-            || K::signed_measure(pts) < params.degenerate_measure * K::regular_measure(h)
-        {
+        let poor = match quality {
+            Some(q) => q < params.degenerate_quality,
+            None => !K::quality_oriented_at_least(pts, params.degenerate_quality),
+        };
+        if poor || K::signed_measure(pts) < params.degenerate_measure * K::regular_measure(h) {
             return true;
         }
-        let mut shortest = f64::INFINITY;
+        // (the square root is increasing, so the shortest length is the
+        // root of the shortest squared length, bit for bit: one root, not six)
+        let mut shortest_squared = f64::INFINITY;
         for i in 0..K::NV {
             for j in i + 1..K::NV {
-                shortest = shortest.min(crate::dim::Point::length(&(pts[i] - pts[j])));
+                let d = pts[i] - pts[j];
+                shortest_squared = shortest_squared.min(crate::dim::Point::dot(&d, &d));
             }
         }
-        shortest < params.degenerate_length * h
+        shortest_squared.sqrt() < params.degenerate_length * h
+    }
+
+    /// Whether `c` is degenerate ([`is_degenerate_sized`](Self::is_degenerate_sized)),
+    /// with its quality from `memo` where recorded and current.
+    fn is_degenerate_remembered(
+        &self,
+        c: CellId,
+        params: &DscParams,
+        sizing: &SizingField,
+        memo: &ImproveMemo,
+    ) -> bool {
+        self.is_degenerate_known(c, params, sizing, memo.qualities.current(self, c))
     }
 
     /// Removes degenerate cells by collapsing their edges, shortest first: a
