@@ -555,6 +555,7 @@ impl<K: Connectivity> Complex<K> {
         // (the recorded qualities are read only about this complex as it
         // is numbered now)
         memo.qualities.sync(self);
+        memo.stars.sync(self);
         let star_degenerate = |v: VertexId, star: &mut Vec<CellId>, memo: &ImproveMemo| {
             self.star_into(v, star);
             star.iter()
@@ -569,7 +570,7 @@ impl<K: Connectivity> Complex<K> {
                 if memo.still_sound(self, v) {
                     continue;
                 }
-                self.star_into(v, &mut walk.star);
+                memo.stars.star_into(self, v, &mut walk.star);
                 for &c in &walk.star {
                     if walk.checked.contains(c) {
                         continue;

@@ -19,7 +19,7 @@
 //! ([`CellQualities`]), which follow the compactions and so hold across
 //! calls.
 
-use super::{CellQualities, CellStamps, JudgedTet};
+use super::{CellQualities, CellStamps, JudgedTet, StarCache};
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::{Dim, D2, D3};
 
@@ -47,6 +47,10 @@ pub struct ImproveMemo {
     pub(crate) qualities: CellQualities,
     /// Scratch of the search for poor tets (its judgements, in order).
     pub(crate) judged: Vec<JudgedTet>,
+    /// 3D stars searched by smoothing and the search for degenerate cells,
+    /// kept while no cell around their vertex changes (forgotten at every
+    /// compaction).
+    pub(crate) stars: StarCache,
     /// What the verdicts were given: the complex's compactions (the ids)
     /// and relabellings (the flip verdicts), the degenerate-cell thresholds
     /// (the `sound` verdicts).

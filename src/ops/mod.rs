@@ -12,6 +12,7 @@ mod memo;
 mod relocate;
 mod smooth;
 mod split;
+mod star_cache;
 
 pub(crate) use cell_qualities::{CellQualities, JudgedTet};
 pub(crate) use cell_stamps::CellStamps;
@@ -22,3 +23,4 @@ pub(crate) use memo::edge_settled;
 pub use memo::ImproveMemo;
 pub use relocate::MoveOutcome;
 pub use smooth::SmoothScratch;
+pub(crate) use star_cache::StarCache;

@@ -73,6 +73,7 @@ impl<K: Dim> Complex<K> {
         // (the recorded qualities are read only about this complex as it
         // is numbered now)
         memo.qualities.sync(self);
+        memo.stars.sync(self);
         let target = self.smoothing_target(v, scratch, memo);
         self.apply_smoothing(v, target, &scratch.star, memo)
     }
@@ -127,7 +128,7 @@ impl<K: Dim> Complex<K> {
             corners,
             computed,
         } = scratch;
-        self.star_into(v, star);
+        memo.stars.star_into(self, v, star);
         corners.clear();
         for &c in star.iter() {
             corners.push((self.cell_points(c), self.local_index(c, v)));
