@@ -5,7 +5,7 @@ use super::workspace::{RegionBuffers, SeedStars, WalkScratch};
 use super::{DscParams, DscWorkspace, SizingField};
 use crate::complex::{CellId, Complex, Rejection, VertexId};
 use crate::dim::{Dim, D2, D3};
-use crate::ops::{edge_settled, CollapseMode, ImproveMemo, JudgedTet, SmoothScratch};
+use crate::ops::{edge_settled, CollapseMode, ImproveMemo, JudgedTet, SmoothScratch, StarCache};
 use rayon::prelude::*;
 use serde::Serialize;
 use smallvec::SmallVec;
@@ -110,10 +110,20 @@ impl<'s> Region<'s> {
 
     /// The cells, collected again unless they are current.
     pub fn cells<K: Connectivity>(&mut self, complex: &Complex<K>) -> &[CellId] {
+        self.cells_kept(complex, None)
+    }
+
+    /// [`cells`](Self::cells), taking the 3D stars of the seeds from
+    /// `kept` where they stand there and keeping those searched.
+    pub(crate) fn cells_kept<K: Connectivity>(
+        &mut self,
+        complex: &Complex<K>,
+        kept: Option<&mut StarCache>,
+    ) -> &[CellId] {
         if !self.current {
             let b = &mut self.buffers;
             match self.seeds {
-                Some(seeds) => complex.collect_region(seeds, b),
+                Some(seeds) => complex.collect_region(seeds, b, kept),
                 None => {
                     b.cells.clear();
                     b.cells.extend(complex.cell_ids());
@@ -349,7 +359,8 @@ impl<K: Connectivity> Complex<K> {
         ]);
         let mut stats = ImproveStats::default();
         let mut region = Region::around_in(seeds, std::mem::take(&mut ws.region));
-        let cells = region.cells(self);
+        ws.memo.stars.sync(self);
+        let cells = region.cells_kept(self, Some(&mut ws.memo.stars));
         self.region_vertices(cells, &mut ws.vertices, &mut ws.walk.vertex_marks);
         stats.smoothed += self.smooth_vertices_with(&ws.vertices, &mut ws.memo, &mut ws.smooth);
         stats.flips += K::improve_connectivity_in(self, &mut region, params, &mut ws.memo);
@@ -430,7 +441,7 @@ impl<K: Connectivity> Complex<K> {
             return;
         }
         marks.resize(self.cell_capacity(), false);
-        self.for_each_star(seeds, star, |cells| {
+        self.for_each_star(seeds, None, star, |cells| {
             for &c in cells {
                 if !marks[c.index()] {
                     marks[c.index()] = true;
@@ -441,12 +452,14 @@ impl<K: Connectivity> Complex<K> {
     }
 
     /// Hands `take` the star of every vertex of `seeds`, in seed order
-    /// (empty for a dead one). In 3D many seeds have their stars searched
-    /// on rayon's threads first, a chunk of seeds each: the same stars in
-    /// the same order. `star` is scratch.
+    /// (empty for a dead one), copied from `kept` where it stands there. In
+    /// 3D many seeds have their stars searched on rayon's threads first, a
+    /// chunk of seeds each: the same stars in the same order. `star` is
+    /// scratch.
     fn for_each_star(
         &self,
         seeds: &[VertexId],
+        kept: Option<&StarCache>,
         star: &mut Vec<CellId>,
         mut take: impl FnMut(&[CellId]),
     ) {
@@ -457,7 +470,7 @@ impl<K: Connectivity> Complex<K> {
                     let mut stars = SeedStars::default();
                     stars.cells.reserve(chunk.len() * CELLS_PER_STAR_3D);
                     for &v in chunk {
-                        self.live_star_into(v, star);
+                        self.live_star_into(v, kept, star);
                         stars.push(star);
                     }
                     stars
@@ -469,17 +482,21 @@ impl<K: Connectivity> Complex<K> {
             return;
         }
         for &v in seeds {
-            self.live_star_into(v, star);
+            self.live_star_into(v, kept, star);
             take(star);
         }
     }
 
-    /// The star of `v` into `star`; empty if `v` is dead.
-    fn live_star_into(&self, v: VertexId, star: &mut Vec<CellId>) {
-        if self.is_vertex_alive(v) {
-            self.star_into(v, star);
-        } else {
+    /// The star of `v` into `star` (copied from `kept` where it stands
+    /// there); empty if `v` is dead.
+    fn live_star_into(&self, v: VertexId, kept: Option<&StarCache>, star: &mut Vec<CellId>) {
+        if !self.is_vertex_alive(v) {
             star.clear();
+        } else if let Some(cells) = kept.and_then(|k| k.current(self, v)) {
+            star.clear();
+            star.extend_from_slice(cells);
+        } else {
+            self.star_into(v, star);
         }
     }
 
@@ -490,7 +507,15 @@ impl<K: Connectivity> Complex<K> {
     /// flips or collapses changed some cells) searches only the stars of
     /// the seeds around which a cell was created or removed since: the
     /// others would be found again cell for cell.
-    fn collect_region(&self, seeds: &[VertexId], b: &mut RegionBuffers) {
+    ///
+    /// A first collection takes the stars from `kept` where they stand
+    /// there, and keeps there those it searched.
+    fn collect_region(
+        &self,
+        seeds: &[VertexId],
+        b: &mut RegionBuffers,
+        kept: Option<&mut StarCache>,
+    ) {
         if K::N != 3 || scan_for_region(seeds.len(), self.cell_count()) {
             b.stars.clear();
             self.region_cells_with(seeds, &mut b.cells, &mut b.marks, &mut b.star);
@@ -501,11 +526,7 @@ impl<K: Connectivity> Complex<K> {
             Some((clock, compactions)) if compactions == now.1 => {
                 self.renew_seed_stars(seeds, clock, b);
             }
-            _ => {
-                b.stars.clear();
-                let stars = &mut b.stars;
-                self.for_each_star(seeds, &mut b.star, |star| stars.push(star));
-            }
+            _ => self.search_seed_stars(seeds, b, kept),
         }
         b.stars.at = Some(now);
         b.cells.clear();
@@ -515,6 +536,28 @@ impl<K: Connectivity> Complex<K> {
             if !b.marks[c.index()] {
                 b.marks[c.index()] = true;
                 b.cells.push(c);
+            }
+        }
+    }
+
+    /// The stars of `seeds` into `b.stars`: from `kept` where they stand
+    /// there (read on the threads with the searches), the others searched
+    /// and then kept there.
+    fn search_seed_stars(
+        &self,
+        seeds: &[VertexId],
+        b: &mut RegionBuffers,
+        kept: Option<&mut StarCache>,
+    ) {
+        b.stars.clear();
+        let stars = &mut b.stars;
+        self.for_each_star(seeds, kept.as_deref(), &mut b.star, |star| stars.push(star));
+        let Some(kept) = kept else {
+            return;
+        };
+        for (i, &v) in seeds.iter().enumerate() {
+            if self.is_vertex_alive(v) && kept.current(self, v).is_none() {
+                kept.keep(self, v, b.stars.star(i));
             }
         }
     }
@@ -672,7 +715,7 @@ impl<K: Connectivity> Complex<K> {
     fn grow_region(&self, cells: &mut Vec<CellId>, marks: &mut Vec<bool>, walk: &mut WalkScratch) {
         marks.resize(self.cell_capacity(), false);
         self.region_vertices(cells, &mut walk.vertices, &mut walk.vertex_marks);
-        self.for_each_star(&walk.vertices, &mut walk.star, |star| {
+        self.for_each_star(&walk.vertices, None, &mut walk.star, |star| {
             for &c in star {
                 if !marks[c.index()] {
                     marks[c.index()] = true;

@@ -59,16 +59,27 @@ impl StarCache {
             complex.star_into(v, out);
             return;
         }
-        if let Some(kept) = self.kept.get(v.index()).copied().flatten() {
-            if complex.cells_changed_at(v) <= kept.at {
-                out.clear();
-                out.extend_from_slice(&self.cells[kept.start as usize..kept.end as usize]);
-                return;
-            }
+        if let Some(star) = self.current(complex, v) {
+            out.clear();
+            out.extend_from_slice(star);
+            return;
         }
         complex.star_into(v, out);
+        self.keep(complex, v, out);
+    }
+
+    /// The kept star of `v`, if there is one and it stands.
+    #[inline]
+    pub(crate) fn current<K: Dim>(&self, complex: &Complex<K>, v: VertexId) -> Option<&[CellId]> {
+        let kept = self.kept.get(v.index()).copied().flatten()?;
+        (complex.cells_changed_at(v) <= kept.at)
+            .then(|| &self.cells[kept.start as usize..kept.end as usize])
+    }
+
+    /// Keeps `star`, the star of `v` searched now.
+    pub(crate) fn keep<K: Dim>(&mut self, complex: &Complex<K>, v: VertexId, star: &[CellId]) {
         let start = self.cells.len() as u32;
-        self.cells.extend_from_slice(out);
+        self.cells.extend_from_slice(star);
         if v.index() >= self.kept.len() {
             self.kept.resize(v.index() + 1, None);
         }
