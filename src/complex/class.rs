@@ -147,6 +147,14 @@ impl<K: Dim> Complex<K> {
     /// 64 cells).
     pub(super) fn phase_pieces_by_search(&self, v: VertexId, star: &mut Vec<CellId>) -> usize {
         self.star_into(v, star);
+        // A star of one label is one piece: the search collected its cells
+        // across facets through `v`, so they hang together that way.
+        if let Some((first, rest)) = star.split_first() {
+            let label = self.labels[first.index()];
+            if rest.iter().all(|c| self.labels[c.index()] == label) {
+                return 1;
+            }
+        }
         let mut piece: SmallVec<[usize; 64]> = SmallVec::from_elem(usize::MAX, star.len());
         let mut pieces = 0;
         let mut stack: SmallVec<[usize; 64]> = SmallVec::new();
