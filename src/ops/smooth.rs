@@ -143,7 +143,11 @@ impl<K: Dim> Complex<K> {
                     q
                 })
             });
-            qualities.fold(1.0, f64::min)
+            // (the first cell of the smallest quality, with it)
+            qualities.enumerate().fold(
+                (1.0, 0),
+                |(q, k), (j, qj)| if qj < q { (qj, j) } else { (q, k) },
+            )
         };
         let target = self.smooth_star(v, corners, worst_now);
         if K::N == 3 {
@@ -158,14 +162,14 @@ impl<K: Dim> Complex<K> {
     /// [`Complex::smooth_vertex`].
     ///
     /// `worst_now` gives the smallest quality of the star's cells as they
-    /// are: qualities recorded while no corner has moved since are read
-    /// rather than computed (the same bits: the same formula of the same
-    /// corners).
+    /// are and the first cell that has it: qualities recorded while no
+    /// corner has moved since are read rather than computed (the same bits:
+    /// the same formula of the same corners).
     fn smooth_star(
         &self,
         v: VertexId,
         star: &[([K::Point; 4], Option<usize>)],
-        worst_now: impl FnOnce() -> f64,
+        worst_now: impl FnOnce() -> (f64, usize),
     ) -> Option<K::Point> {
         // A good star is left without computing the qualities. (In 3D
         // hardly any is: on the brain phantom at `--size 120` none of the
@@ -213,8 +217,16 @@ impl<K: Dim> Complex<K> {
             return None;
         }
         // (the star's quality now, measured only for a move worth testing)
-        let before = worst_now();
-        if !at(target).all(|pts| K::quality_oriented_at_least(&pts[..K::NV], before)) {
+        // Every cell must keep the quality of the worst: the worst cell
+        // itself, with no slack, fails most often, so it is judged first
+        // (the verdict is the same in any order).
+        let (before, worst) = worst_now();
+        let keeps = |pts: [K::Point; 4]| K::quality_oriented_at_least(&pts[..K::NV], before);
+        if !at(target).nth(worst).is_none_or(keeps)
+            || !at(target)
+                .enumerate()
+                .all(|(k, pts)| k == worst || keeps(pts))
+        {
             return None;
         }
         // The exact orientation test last: most moves fail the quality test,
