@@ -72,8 +72,14 @@ impl StarCache {
     #[inline]
     pub(crate) fn current<K: Dim>(&self, complex: &Complex<K>, v: VertexId) -> Option<&[CellId]> {
         let kept = self.kept.get(v.index()).copied().flatten()?;
-        (complex.cells_changed_at(v) <= kept.at)
-            .then(|| &self.cells[kept.start as usize..kept.end as usize])
+        let star = (complex.cells_changed_at(v) <= kept.at)
+            .then(|| &self.cells[kept.start as usize..kept.end as usize]);
+        debug_assert!(
+            star.is_none_or(|star| star == fresh_star(complex, v)),
+            "the kept star of {v:?} stands but differs from its search: an operation \
+             created or removed cells around it without marking its star changed"
+        );
+        star
     }
 
     /// Keeps `star`, the star of `v` searched now.
@@ -89,4 +95,12 @@ impl StarCache {
             at: complex.move_clock(),
         });
     }
+}
+
+/// The star of `v` searched now: what a kept star must equal while it stands
+/// (compared in debug builds only).
+fn fresh_star<K: Dim>(complex: &Complex<K>, v: VertexId) -> Vec<CellId> {
+    let mut star = Vec::new();
+    complex.star_into(v, &mut star);
+    star
 }

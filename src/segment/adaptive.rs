@@ -650,8 +650,6 @@ impl AdaptiveSizing {
 /// mesh.
 pub const START_SPLIT: f64 = 0.5;
 
-/// The spacing of the sizing field's grid: fine enough to place the
-/// interface size; each sample is a min.
 /// Lowers `field` to `h` at the midpoint of every edge of `c` whose two
 /// ends lie on an interface. The resize judges an edge by `h` at its
 /// midpoint, and with the request at the cell's centroid alone the grid
@@ -679,6 +677,8 @@ fn lower_at_interface_edges<K: Dim>(
     }
 }
 
+/// The spacing of the sizing field's grid: fine enough to place the
+/// interface size; each sample is a min.
 fn grid_spacing(sizes: &Sizes) -> f64 {
     sizes.h_min.max(0.5 * sizes.interface)
 }

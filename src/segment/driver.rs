@@ -219,9 +219,9 @@ pub struct SegmentReport {
     /// ([`Finish::rigidity_factor`](super::adaptive::Finish::rigidity_factor)).
     pub rigidity: Option<f64>,
     /// The standard deviation, in pixels, of the Gaussian the image the
-    /// region force samples was smoothed with (2D on the uniform mesh, from
-    /// the image's noise: [`force_smoothing`]; 0 for none); `None` without
-    /// the region force.
+    /// region force samples was smoothed with (2D, on the uniform and the
+    /// adaptive mesh, from the image's noise: [`force_smoothing`]; 0 for
+    /// none); `None` without the region force.
     pub force_smoothing: Option<f64>,
     /// The input's intensity figures (range, robust range, noise estimate).
     pub intensity: IntensityStats,

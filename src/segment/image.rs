@@ -17,8 +17,32 @@ pub struct ImageView<'a> {
     /// Size of a voxel along x, y, z in the complex's units (1 for 2D images).
     pub spacing: [f64; 3],
     /// The robust range of `data` where the caller has selected it already
-    /// ([`ImageView::with_robust_range`]).
-    robust_range: Option<(f64, f64)>,
+    /// ([`ImageView::with_robust_range`]), with the samples it was given for.
+    robust_range: Option<KnownRange>,
+}
+
+/// A robust range given with a view, and the samples it was given for (their
+/// address and count): `data` is a public field, and a range carried over to
+/// other samples must not be read as theirs.
+#[derive(Clone, Copy, Debug)]
+struct KnownRange {
+    range: (f64, f64),
+    address: usize,
+    len: usize,
+}
+
+impl KnownRange {
+    fn of(data: &[f32], range: (f64, f64)) -> Self {
+        KnownRange {
+            range,
+            address: data.as_ptr() as usize,
+            len: data.len(),
+        }
+    }
+
+    fn holds_for(&self, data: &[f32]) -> bool {
+        self.address == data.as_ptr() as usize && self.len == data.len()
+    }
 }
 
 impl<'a> ImageView<'a> {
@@ -63,14 +87,18 @@ impl<'a> ImageView<'a> {
     /// selecting the same quantiles again.
     pub fn with_robust_range(self, range: (f64, f64)) -> Self {
         ImageView {
-            robust_range: Some(range),
+            robust_range: Some(KnownRange::of(self.data, range)),
             ..self
         }
     }
 
-    /// The robust range given by [`with_robust_range`](Self::with_robust_range).
+    /// The robust range given by [`with_robust_range`](Self::with_robust_range),
+    /// while the view still holds the samples it was given for (`None` once
+    /// `data` is replaced).
     pub fn known_robust_range(&self) -> Option<(f64, f64)> {
         self.robust_range
+            .filter(|known| known.holds_for(self.data))
+            .map(|known| known.range)
     }
 
     /// A view of other samples `data` on the same grid (a smoothed copy):
@@ -148,5 +176,25 @@ impl<'a> ImageView<'a> {
             }
         }
         seen.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_given_robust_range_holds_only_for_its_samples() {
+        let (a, b) = (vec![0.0f32; 16], vec![1.0f32; 16]);
+        let view = ImageView::new_2d(4, 4, &a)
+            .unwrap()
+            .with_robust_range((0.1, 0.9));
+        assert_eq!(view.known_robust_range(), Some((0.1, 0.9)));
+        let scaled = view.with_spacing([2.0, 2.0, 1.0]).unwrap();
+        assert_eq!(scaled.known_robust_range(), Some((0.1, 0.9)));
+        let mut swapped = view;
+        swapped.data = &b;
+        assert_eq!(swapped.known_robust_range(), None);
+        assert_eq!(view.with_data(&a).known_robust_range(), None);
     }
 }
