@@ -658,7 +658,7 @@ pub const START_SPLIT: f64 = 0.5;
 /// against 6.8 px at `L` = 8), and the adaptive Dice fell below the uniform
 /// mesh's on the 512² two-phase images. In 3D, whose fine finish refines
 /// the interfaces anyway and whose time is the constraint, the same
-/// requests added 4 % tets at a Dice within ±0.0004 on the 64³ phantoms,
+/// requests added 3–5 % tets at a Dice within ±0.0004 on three 64³ phantoms,
 /// so only 2D makes them (`benches/RESULTS.md`, "Adaptive resolution").
 fn lower_at_interface_edges<K: Dim>(
     complex: &Complex<K>,
