@@ -175,6 +175,81 @@ impl Helper {
     }
 }
 
+/// What the setup reads from the image before it builds the mesh: checked
+/// to hold enough distinct values, with the figures the edge length is
+/// chosen from.
+struct ImageFigures {
+    /// Smallest and largest sample.
+    range: (f64, f64),
+    intensity: IntensityStats,
+    /// The contrast between the classes ([`class_gap`](Self::class_gap)).
+    gap: Option<f64>,
+    /// The edge length L ([`edge_length`](Self::edge_length)).
+    l: f64,
+}
+
+impl ImageFigures {
+    /// The figures of `image`, or why it cannot be segmented into
+    /// `params.phases` phases (not finite, constant, too few distinct values).
+    fn of<K: Raster>(image: &ImageView<'_>, params: &SegmentParams) -> Result<Self, SegmentError> {
+        let range = image.range().ok_or(SegmentError::NonFinite)?;
+        if range.1 - range.0 <= 0.0 {
+            return Err(SegmentError::ConstantImage(range.0));
+        }
+        let distinct = image.distinct_values(params.phases);
+        if distinct < params.phases {
+            return Err(SegmentError::TooFewIntensities {
+                distinct,
+                phases: params.phases,
+            });
+        }
+        let intensity = IntensityStats::of(image);
+        let gap = Self::class_gap::<K>(params, image, &intensity);
+        let l = Self::edge_length(params, image, &intensity, gap);
+        Ok(ImageFigures {
+            range,
+            intensity,
+            gap,
+            l,
+        })
+    }
+
+    /// In 2D, the smallest gap between the class means of the least-variance
+    /// split of the pixels' histogram, the contrast that the noise is weighed
+    /// against for the edge length and the rigidity; `None` in 3D, which
+    /// keeps both as given.
+    fn class_gap<K: Raster>(
+        params: &SegmentParams,
+        image: &ImageView<'_>,
+        intensity: &IntensityStats,
+    ) -> Option<f64> {
+        if K::N != 2 {
+            return None;
+        }
+        smallest_class_gap(&intensity.histogram(image), params.phases)
+    }
+
+    /// The edge length L: the parameter's if given; else the size default,
+    /// in 2D shortened for an image whose noise is small against the
+    /// contrast `gap` between its phases ([`contrast_edge_length`], the
+    /// contrast from [`class_gap`](Self::class_gap)). 3D keeps the size
+    /// default.
+    fn edge_length(
+        params: &SegmentParams,
+        image: &ImageView<'_>,
+        intensity: &IntensityStats,
+        gap: Option<f64>,
+    ) -> f64 {
+        let l = params.resolved_edge_length_in(image.dims, image.spacing);
+        match gap {
+            Some(gap) if params.edge_length.is_none() => {
+                contrast_edge_length(l, intensity.noise, gap)
+            }
+            _ => l,
+        }
+    }
+}
+
 /// Seconds spent in each stage of the evolution.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct StageTimes {
@@ -445,20 +520,25 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         Self::check_size(&image)?;
         params.validate_in(image.dims, image.spacing)?;
         params.check_shapes_inside(image.extent())?;
-        let range = image.range().ok_or(SegmentError::NonFinite)?;
-        if range.1 - range.0 <= 0.0 {
-            return Err(SegmentError::ConstantImage(range.0));
-        }
-        let distinct = image.distinct_values(params.phases);
-        if distinct < params.phases {
-            return Err(SegmentError::TooFewIntensities {
-                distinct,
-                phases: params.phases,
-            });
-        }
-        let intensity = IntensityStats::of(&image);
-        let gap = Self::class_gap(&params, &image, &intensity);
-        let l = Self::edge_length(&params, &image, &intensity, gap);
+        let helper = Helper::new();
+        let check_image = CheckImage::default();
+        // The image's figures on this thread; the checks' smoothed image on
+        // the helper, which needs none of them.
+        let checks_now = K::N == 2 && params.claims_whole_image();
+        let (figures, ()) = helper.here().join(
+            || ImageFigures::of::<K>(&image, &params),
+            || {
+                if checks_now {
+                    check_image.of(&image);
+                }
+            },
+        );
+        let ImageFigures {
+            range,
+            intensity,
+            gap,
+            l,
+        } = figures?;
         if let (Some(gap), Some(rigidity)) = (gap, models.force_mut::<Rigidity<K>>()) {
             rigidity.beta = contrast_rigidity(rigidity.beta, intensity.noise, gap);
         }
@@ -477,12 +557,10 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         } else {
             0
         };
-        let helper = Helper::new();
-        let check_image = CheckImage::default();
-        // The mesh on this thread; the smoothed images on the helper.
+        // The mesh on this thread; the region force's smoothed image on the
+        // helper.
         let force_smoothing = gap.map(|gap| force_smoothing(intensity.noise, gap));
         let region = models.force_mut::<RegionForce<K>>();
-        let checks_now = K::N == 2 && params.claims_whole_image();
         let (complex, ()) = helper.here().join(
             || match given {
                 Some(c) => Ok(c),
@@ -491,9 +569,6 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             || {
                 if let (Some(sigma), Some(region)) = (force_smoothing, region) {
                     region.sample_smoothed(&image, sigma);
-                }
-                if checks_now {
-                    check_image.of(&image);
                 }
             },
         );
@@ -645,41 +720,6 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             if self.complex.cell_count() < before + before / START_GROWTH {
                 break;
             }
-        }
-    }
-
-    /// In 2D, the smallest gap between the class means of the least-variance
-    /// split of the pixels' histogram, the contrast that the noise is weighed
-    /// against for the edge length and the rigidity; `None` in 3D, which
-    /// keeps both as given.
-    fn class_gap(
-        params: &SegmentParams,
-        image: &ImageView<'_>,
-        intensity: &IntensityStats,
-    ) -> Option<f64> {
-        if K::N != 2 {
-            return None;
-        }
-        smallest_class_gap(&intensity.histogram(image), params.phases)
-    }
-
-    /// The edge length L: the parameter's if given; else the size default,
-    /// in 2D shortened for an image whose noise is small against the
-    /// contrast `gap` between its phases ([`contrast_edge_length`], the
-    /// contrast from [`class_gap`](Self::class_gap)). 3D keeps the size
-    /// default.
-    fn edge_length(
-        params: &SegmentParams,
-        image: &ImageView<'_>,
-        intensity: &IntensityStats,
-        gap: Option<f64>,
-    ) -> f64 {
-        let l = params.resolved_edge_length_in(image.dims, image.spacing);
-        match gap {
-            Some(gap) if params.edge_length.is_none() => {
-                contrast_edge_length(l, intensity.noise, gap)
-            }
-            _ => l,
         }
     }
 
