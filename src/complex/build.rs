@@ -57,6 +57,19 @@ impl<K: Dim> Complex<K> {
     /// out-of-range indices and non-manifold facets are rejected.
     pub fn from_arrays(
         points: Vec<K::Point>,
+        cells: Vec<K::Cell>,
+        labels: Vec<Label>,
+        domain: (K::Point, K::Point),
+    ) -> Result<Self, BuildError> {
+        let mut complex = Self::unclassified(points, cells, labels, domain)?;
+        complex.reclassify_all();
+        Ok(complex)
+    }
+
+    /// [`from_arrays`](Self::from_arrays) with every vertex classed
+    /// interior and on no box face, for the caller to classify.
+    fn unclassified(
+        points: Vec<K::Point>,
         mut cells: Vec<K::Cell>,
         labels: Vec<Label>,
         domain: (K::Point, K::Point),
@@ -131,7 +144,6 @@ impl<K: Dim> Complex<K> {
         };
         // Built meshes come in grid (or TetGen's) order, local enough.
         complex.book.ordered_cells = n_cells;
-        complex.reclassify_all();
         Ok(complex)
     }
 
@@ -145,6 +157,22 @@ impl<K: Dim> Complex<K> {
             }
         }
         self.give_back(star);
+    }
+
+    /// Classes every vertex as [`from_arrays`](Self::from_arrays) would
+    /// for a mesh of one phase whose vertex stars are each one piece (a
+    /// triangulation of the box): interior, on the box faces its position
+    /// lies on. No star is walked.
+    fn classify_one_phase(&mut self) {
+        debug_assert!(self.labels.iter().all(|&l| l == self.labels[0]));
+        for v in 0..self.positions.len() {
+            if self.vertex_cell[v].is_some() {
+                self.classes[v] = VertexClass {
+                    kind: VertexKind::Interior,
+                    boundary: self.boundary_mask(&self.positions[v]),
+                };
+            }
+        }
     }
 
     /// Relabels every cell with `f(cell centroid)` (used by initialisations).
@@ -163,40 +191,22 @@ impl<K: Dim> Complex<K> {
     }
 }
 
-/// The neighbour across every facet: the facets of all cells sorted by
-/// their vertices, so each shared facet appears as two consecutive entries.
-/// A facet held by more than two cells is rejected (non-manifold).
+/// The neighbour across every facet. Each facet is looked for among the
+/// facets met before it with the same smallest vertex (a vertex holds a few;
+/// their room is laid out by a counting sort): it is glued to the one it
+/// matches, or else kept for a later one. A facet held by more than two
+/// cells is rejected (non-manifold): of such facets, the one with the
+/// smallest key, naming its third cell.
 fn glue_facets<K: Dim>(
     cells: &[K::Cell],
     vertices: usize,
 ) -> Result<Vec<K::Neighbours>, BuildError> {
-    let facets = facets_sorted::<K>(cells, vertices);
-    let mut neighbours = vec![K::no_neighbours(); cells.len()];
-    for run in facets.chunk_by(|x, y| x.0 == y.0) {
-        match run {
-            [_] => {}
-            [(_, a, i), (_, b, j)] => {
-                neighbours[*a as usize].as_mut()[*i as usize] = Some(CellId::new(*b));
-                neighbours[*b as usize].as_mut()[*j as usize] = Some(CellId::new(*a));
-            }
-            _ => return Err(BuildError::NonManifold(run[2].1 as usize)),
-        }
-    }
-    Ok(neighbours)
-}
-
-/// Every facet of `cells` as (key, cell, opposite corner), in increasing
-/// order. A key's first entry is its smallest vertex, so the facets are
-/// first distributed by that vertex (a counting sort, linear in their
-/// number) and only each vertex's few facets are compared: a mesh of many
-/// cells is glued without sorting all its facets at once.
-fn facets_sorted<K: Dim>(cells: &[K::Cell], vertices: usize) -> Vec<(FacetKey, u32, u8)> {
     let facets = || {
         cells.iter().enumerate().flat_map(|(ci, cell)| {
             (0..K::NV).map(move |i| (facet_key(cell.as_ref(), i), ci as u32, i as u8))
         })
     };
-    // start[v]: where the facets whose smallest vertex is v begin
+    // The facets whose smallest vertex is v are met in room[start[v]..end[v]].
     let mut start = vec![0usize; vertices + 1];
     for (key, _, _) in facets() {
         start[key[0] as usize + 1] += 1;
@@ -204,17 +214,49 @@ fn facets_sorted<K: Dim>(cells: &[K::Cell], vertices: usize) -> Vec<(FacetKey, u
     for v in 0..vertices {
         start[v + 1] += start[v];
     }
-    let mut next = start.clone();
-    let mut sorted = vec![([0u32; 3], 0u32, 0u8); start[vertices]];
-    for facet in facets() {
-        let slot = &mut next[facet.0[0] as usize];
-        sorted[*slot] = facet;
-        *slot += 1;
+    let mut end = start.clone();
+    let mut room = vec![MetFacet::default(); start[vertices]];
+    let mut neighbours = vec![K::no_neighbours(); cells.len()];
+    let mut non_manifold: Option<(FacetKey, u32)> = None;
+    for (key, cell, i) in facets() {
+        let v = key[0] as usize;
+        let met = &mut room[start[v]..end[v]];
+        match met.iter_mut().find(|m| m.key == key) {
+            Some(m) if m.glued => {
+                if non_manifold.is_none_or(|(worst, _)| key < worst) {
+                    non_manifold = Some((key, cell));
+                }
+            }
+            Some(m) => {
+                m.glued = true;
+                neighbours[m.cell as usize].as_mut()[m.opposite as usize] = Some(CellId::new(cell));
+                neighbours[cell as usize].as_mut()[i as usize] = Some(CellId::new(m.cell));
+            }
+            None => {
+                room[end[v]] = MetFacet {
+                    key,
+                    cell,
+                    opposite: i,
+                    glued: false,
+                };
+                end[v] += 1;
+            }
+        }
     }
-    for v in 0..vertices {
-        sorted[start[v]..start[v + 1]].sort_unstable();
+    match non_manifold {
+        Some((_, cell)) => Err(BuildError::NonManifold(cell as usize)),
+        None => Ok(neighbours),
     }
-    sorted
+}
+
+/// A facet [`glue_facets`] met first: its key, its cell and the local index
+/// of the corner opposite it, and whether a second cell was glued to it.
+#[derive(Clone, Copy, Default)]
+struct MetFacet {
+    key: FacetKey,
+    cell: u32,
+    opposite: u8,
+    glued: bool,
 }
 
 /// The vertices and inner triangles of a spade triangulation, numbered as
@@ -263,12 +305,10 @@ impl Complex<D2> {
         check_edge_length(l, w.min(h))?;
         let (points, cells) = staggered_lattice(w, h, l);
         let labels = vec![0; cells.len()];
-        Self::from_arrays(
-            points,
-            cells,
-            labels,
-            (Vector2::zeros(), Vector2::new(w, h)),
-        )
+        let domain = (Vector2::zeros(), Vector2::new(w, h));
+        let mut complex = Self::unclassified(points, cells, labels, domain)?;
+        complex.classify_one_phase();
+        Ok(complex)
     }
 
     /// A triangulation of `[0,w]×[0,h]` at edge length `l` that conforms to the
@@ -555,6 +595,8 @@ mod tests {
                         c.slots.iter().map(|slot| slot.corners).collect()
                     };
                     assert_eq!(corners(&direct), corners(&reference), "{w}×{h}, L {l}");
+                    assert_eq!(direct.classes, reference.classes, "{w}×{h}, L {l}");
+                    assert!(direct.validate().is_empty(), "{w}×{h}, L {l}");
                     assert_eq!(cells.len(), reference.slots.len());
                     compared += 1;
                 }
