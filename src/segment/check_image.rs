@@ -4,10 +4,11 @@
 //! The absorbed-phase check ([`super::absorbed`]) and the missed-object check
 //! ([`super::missed_objects`]) both ask what the image looks like where
 //! single noisy samples do not count, and both read the same smoothed copy.
-//! A 2D run makes it during its setup, on the second thread beside the mesh
-//! (the setup is otherwise sequential, and at 256² the blur is a tenth of a
-//! run); a 3D run makes it when a check first asks, after the iterations, so
-//! that the copy does not add to the memory of the run itself.
+//! A 2D run makes it during its setup, on the second thread while the first
+//! thread reads the image's figures (the blur needs none of them; the setup
+//! is otherwise sequential, and at 256² the blur is a tenth of a run); a 3D
+//! run makes it when a check first asks, after the iterations, so that the
+//! copy does not add to the memory of the run itself.
 
 use std::sync::OnceLock;
 
