@@ -340,7 +340,8 @@ pub struct Segment3dOptions {
     #[arg(long, value_name = "N")]
     pub refine_start: Option<usize>,
     /// Stop when the stopping rule is met, without the fine finish (the
-    /// interfaces refined to L/2 for 2 more iterations; with three or more
+    /// interfaces refined to L/2, not below the edge of a tetrahedron of one
+    /// voxel, for 2 more iterations; with three or more
     /// phases the first of them is a last flip round), which
     /// makes data differing by a re-quantisation give the same labels
     #[arg(long)]

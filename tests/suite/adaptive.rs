@@ -3,10 +3,10 @@
 
 use crate::common::assert_valid;
 use dsc_seg::complex::Complex;
-use dsc_seg::dim::{D2, D3};
+use dsc_seg::dim::{Dim, D2, D3};
 use dsc_seg::phantom::{junctions3d, shapes3d, Phantom2Kind};
 use dsc_seg::pipeline::mean_dice;
-use dsc_seg::segment::adaptive::{AdaptiveSizing, SizingParams};
+use dsc_seg::segment::adaptive::{single_sample_edge, AdaptiveSizing, SizingParams};
 use dsc_seg::segment::models::Rigidity;
 use dsc_seg::segment::{
     Flow, ImageView, PhaseStats, Raster, SegmentParams, SegmentReport, Segmentation,
@@ -153,15 +153,19 @@ fn coarse_to_fine_3d_keeps_the_dice_with_fewer_tets() {
 }
 
 /// The fine finish of the 3D two-phase default: once the stopping rule is
-/// met, the run goes on for the finish's iterations without flips, on
-/// smaller interface facets (resizing splits the interface edges longer
-/// than twice `L/2`: two thirds of the mean facet area here), on a valid
-/// mesh and at least as accurate.
+/// met, the run goes on for the finish's iterations without flips, with
+/// the interface edges longer than twice `L/2` split (the resize splits an
+/// edge longer than twice its size), on a valid mesh and at least as
+/// accurate. At the default `L` = 3 voxels `L/2` is below the finish's floor
+/// of a tetrahedron of one voxel and the finish splits almost nothing, so
+/// the run takes `L` = 6.
 #[test]
 fn the_3d_fine_finish_refines_the_interfaces_after_the_stopping_rule() {
     let ph = shapes3d::torus(32, 0.1, 2);
     let view = ImageView::new_3d([ph.nx, ph.ny, ph.nz], &ph.image).unwrap();
-    let finished = SegmentParams::new_3d(2);
+    let l = 6.0;
+    let mut finished = SegmentParams::new_3d(2);
+    finished.edge_length = Some(l);
     let finish = finished
         .sizing
         .finish
@@ -173,23 +177,24 @@ fn the_3d_fine_finish_refines_the_interfaces_after_the_stopping_rule() {
         let report = seg.run(|_| {});
         assert_valid(seg.complex());
         assert!(report.converged);
-        let facets: Vec<f64> = seg
-            .complex()
-            .interface_facets()
-            .map(|f| f.measure)
-            .collect();
-        let mean_facet = facets.iter().sum::<f64>() / facets.len() as f64;
+        let (mut edges, mut long) = (0, 0);
+        for f in seg.complex().interface_facets() {
+            for k in 0..3 {
+                edges += 1;
+                long += usize::from((f.points[k] - f.points[(k + 1) % 3]).norm() > l);
+            }
+        }
         let dice = mean_dice(&seg.label_image(), &ph.truth, 2);
-        (report, mean_facet, dice)
+        (report, long as f64 / edges as f64, dice)
     };
-    let (plain, plain_facet, plain_dice) = run(plain);
-    let (finished, finished_facet, finished_dice) = run(finished);
+    let (plain, plain_long, plain_dice) = run(plain);
+    let (finished, finished_long, finished_dice) = run(finished);
     assert_eq!(finished.iterations, plain.iterations + finish.iterations);
     let last = &finished.history[plain.iterations..];
     assert!(last.iter().all(|r| r.flips == 0), "{last:?}");
     assert!(
-        finished_facet < 0.75 * plain_facet,
-        "mean interface facet {finished_facet} finished, {plain_facet} without"
+        plain_long > 0.0 && finished_long < 0.5 * plain_long,
+        "interface edges longer than L: {finished_long} finished, {plain_long} without"
     );
     assert!(
         finished_dice > plain_dice - 0.002,
@@ -239,12 +244,26 @@ fn a_stiffer_finish_raises_the_rigidity_after_its_first_iteration() {
     assert!(mean_dice(&seg.label_image(), &ph.truth, 3) > 0.95);
 }
 
-/// The fine finish refines the surface, not a band around it: cells with a
-/// facet on the interface ask for the finer size, while most cells that
-/// touch it only at a vertex or an edge keep `L` (where the gradation from
-/// the finer cells allows).
+/// The edge of the regular cell of one sample: its measure is one sample's,
+/// in 2D and 3D and at any sample step.
 #[test]
-fn the_fine_finish_asks_for_the_finer_size_only_at_the_surface() {
+fn the_single_sample_edge_makes_a_cell_of_one_sample() {
+    for step in [0.5, 1.0, 2.0] {
+        let (e2, e3) = (
+            single_sample_edge::<D2>(step),
+            single_sample_edge::<D3>(step),
+        );
+        assert!((D2::regular_measure(e2) - step * step).abs() < 1e-12 * step * step);
+        assert!((D3::regular_measure(e3) - step.powi(3)).abs() < 1e-12 * step.powi(3));
+    }
+    assert!((single_sample_edge::<D3>(1.0) - 2.04).abs() < 0.005);
+}
+
+/// The fine finish refines no surface cell below the edge of a regular
+/// tetrahedron of one voxel: at `L` = 3 voxels its `L/2` would ask for
+/// cells of 0.4 voxels.
+#[test]
+fn the_fine_finish_refines_no_cell_below_one_voxel() {
     let l = 3.0;
     let mut complex = Complex::<D3>::cuboid([18.0; 3], l).unwrap();
     let left: Vec<_> = complex
@@ -258,6 +277,48 @@ fn the_fine_finish_asks_for_the_finer_size_only_at_the_surface() {
         ..SizingParams::default()
     };
     let sizes = params.sizes(3, 18.0, 1.0, l);
+    assert!(sizes.h_min <= 0.5 * l, "the test needs h_min at most L/2");
+    let (lo, hi) = complex.domain();
+    let mut sizing = AdaptiveSizing::new::<D3>(&params, sizes, lo, hi);
+    sizing.refine_interfaces(0.5 * l);
+    let field = sizing.update(&complex, &[], &PhaseStats::new(2)).clone();
+    let floor = single_sample_edge::<D3>(1.0);
+    let (finest, _) = field.range().unwrap();
+    assert!(
+        finest >= floor - 1e-12,
+        "the field asks for {finest} < {floor}"
+    );
+    let surface_sizes: Vec<f64> = complex
+        .cell_ids()
+        .filter(|&c| (0..4).any(|i| complex.is_interface_facet(c, i)))
+        .map(|c| {
+            let pts = complex.cell_points(c);
+            field.at(&((pts[0] + pts[1] + pts[2] + pts[3]) * 0.25), sizes.h_max)
+        })
+        .collect();
+    assert!(!surface_sizes.is_empty());
+    assert!(surface_sizes.iter().all(|&h| h <= floor + 1e-12));
+}
+
+/// The fine finish refines the surface, not a band around it: cells with a
+/// facet on the interface ask for the finer size, while most cells that
+/// touch it only at a vertex or an edge keep `L` (where the gradation from
+/// the finer cells allows).
+#[test]
+fn the_fine_finish_asks_for_the_finer_size_only_at_the_surface() {
+    let (side, l) = (36.0, 6.0);
+    let mut complex = Complex::<D3>::cuboid([side; 3], l).unwrap();
+    let left: Vec<_> = complex
+        .cell_ids()
+        .filter(|&c| complex.cell_points(c).iter().map(|p| p.x).sum::<f64>() < 2.0 * side)
+        .map(|c| (c, 1))
+        .collect();
+    complex.set_labels(&left);
+    let params = SizingParams {
+        adaptive: true,
+        ..SizingParams::default()
+    };
+    let sizes = params.sizes(3, side, 1.0, l);
     let (lo, hi) = complex.domain();
     let mut sizing = AdaptiveSizing::new::<D3>(&params, sizes, lo, hi);
     let finer = 0.5 * l;
