@@ -95,7 +95,7 @@ fn best_retriangulation(
     pv: Vector3<f64>,
     floor: f64,
 ) -> Option<Splits> {
-    let (best, split) = klincsek(w, pu, pv, |p| D3::quality_oriented(&p));
+    let (best, split) = klincsek(w, pu, pv, floor, |p| D3::quality_oriented(&p));
     if best <= floor {
         return None;
     }
@@ -106,23 +106,33 @@ fn best_retriangulation(
     if oriented {
         return Some(split);
     }
-    let (best, split) = klincsek(w, pu, pv, tet_quality);
+    let (best, split) = klincsek(w, pu, pv, floor, tet_quality);
     (best > floor).then_some(split)
 }
 
-/// Klincsek's programme over the ring `w` with the tet quality `quality`.
+/// Klincsek's programme over the ring `w` with the tet quality `quality`,
+/// for the caller that wants the best triangulation only if its smallest
+/// quality exceeds `floor`: the returned quality exceeds `floor` exactly
+/// when the full programme's does, and then both, and the triangles, are
+/// the full programme's.
+///
+/// An apex `b` of the sub-polygon `a..=c` gives the smallest of the two
+/// sides' best and its triangle's two tets. The tets' qualities, most of
+/// the work, are computed only while that can still beat the sub-polygon's
+/// best so far and `floor`: a candidate at or under the best so far never
+/// replaces it, and one at or under `floor` makes every triangulation
+/// through it fail the caller. So a sub-polygon's best above `floor` comes
+/// out exact, with the full programme's apex (the first of the largest);
+/// one at or under `floor` comes out at or under it too (possibly lower),
+/// and no triangulation above `floor` holds such a sub-polygon.
 fn klincsek(
     w: &[Vector3<f64>],
     pu: Vector3<f64>,
     pv: Vector3<f64>,
+    floor: f64,
     quality: impl Fn([Vector3<f64>; 4]) -> f64,
 ) -> (f64, Splits) {
     let k = w.len();
-    // The smaller quality of the two tets of a triangle of the ring.
-    let tri_q = |a: usize, b: usize, c: usize| {
-        let [with_v, with_u] = ring_tets(|i| w[i], (a, b, c), pu, pv);
-        quality(with_v).min(quality(with_u))
-    };
     // best[a][c]: best smallest quality triangulating the sub-polygon a..=c; split[a][c]: its apex.
     let mut best = [[f64::INFINITY; MAX_RING]; MAX_RING];
     let mut split = [[0usize; MAX_RING]; MAX_RING];
@@ -131,9 +141,19 @@ fn klincsek(
     for len in 2..k {
         for a in 0..k - len {
             let c = a + len;
-            let mut top = -1.0;
+            let mut top: f64 = -1.0;
             for b in a + 1..c {
-                let q = best[a][b].min(best[b][c]).min(tri_q(a, b, c));
+                let bar = top.max(floor);
+                let sides = best[a][b].min(best[b][c]);
+                if sides <= bar {
+                    continue;
+                }
+                let [with_v, with_u] = ring_tets(|i| w[i], (a, b, c), pu, pv);
+                let q_v = quality(with_v);
+                if q_v <= bar {
+                    continue;
+                }
+                let q = sides.min(q_v).min(quality(with_u));
                 if q > top {
                     top = q;
                     split[a][c] = b;
@@ -403,6 +423,35 @@ mod tests {
         assert_eq!(c.cell_count(), 2);
     }
 
+    /// Klincsek's programme on the exact quality without skipping any apex:
+    /// what `best_retriangulation` must decide as.
+    // Index arithmetic over the interval table reads more plainly than iterators.
+    #[allow(clippy::needless_range_loop)]
+    fn full_klincsek(w: &[Vector3<f64>], pu: Vector3<f64>, pv: Vector3<f64>) -> (f64, Splits) {
+        let k = w.len();
+        let mut best = [[f64::INFINITY; MAX_RING]; MAX_RING];
+        let mut split = [[0usize; MAX_RING]; MAX_RING];
+        for len in 2..k {
+            for a in 0..k - len {
+                let c = a + len;
+                let mut top = -1.0;
+                for b in a + 1..c {
+                    let [with_v, with_u] = ring_tets(|i| w[i], (a, b, c), pu, pv);
+                    let q = best[a][b]
+                        .min(best[b][c])
+                        .min(tet_quality(with_v))
+                        .min(tet_quality(with_u));
+                    if q > top {
+                        top = q;
+                        split[a][c] = b;
+                    }
+                }
+                best[a][c] = top;
+            }
+        }
+        (best[0][k - 1], Splits(split))
+    }
+
     /// The formula-first programme decides as the exact one: the same
     /// verdict against the floor and the same triangles, on random rings
     /// (convex and not, some with corners pushed onto the edge's line).
@@ -438,7 +487,7 @@ mod tests {
             } else {
                 rng.random::<f64>() * 0.5 - 0.1
             };
-            let (best, exact) = klincsek(&w, pu, pv, tet_quality);
+            let (best, exact) = full_klincsek(&w, pu, pv);
             let fast = best_retriangulation(&w, pu, pv, floor);
             assert_eq!(fast.is_some(), best > floor, "ring {w:?}, floor {floor}");
             if let Some(fast) = fast {
