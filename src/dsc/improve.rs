@@ -215,6 +215,8 @@ impl Connectivity for D3 {
     ) -> usize {
         memo.refused_flips.sync(complex, params.low_quality);
         memo.qualities.sync(complex);
+        memo.not_poor.clear();
+        memo.not_poor.resize(complex.cell_capacity(), false);
         let mut flips = 0;
         let mut poor = complex.take_list();
         let mut judged = std::mem::take(&mut memo.judged);
@@ -265,9 +267,11 @@ const PARALLEL_QUALITY_FROM: usize = 8192;
 /// The live cells of `cells` whose quality is below `threshold`, in their
 /// order, into `out` (judged on rayon's threads for a large region). A tet
 /// whose flips `memo` knows to be refused is taken without its quality: it
-/// was below the threshold then, and its corners have not moved. Other
-/// tets' qualities come from `memo` where no corner moved since it recorded
-/// them; those computed now are recorded. `judged` is scratch.
+/// was below the threshold then, and its corners have not moved. A tet an
+/// earlier sweep of the same improvement found at or above the threshold
+/// (`memo.not_poor`) is left without a look. Other tets' qualities come
+/// from `memo` where no corner moved since it recorded them; those
+/// computed now are recorded. `judged` is scratch.
 fn cells_below_quality(
     complex: &Complex<D3>,
     cells: &[CellId],
@@ -278,7 +282,7 @@ fn cells_below_quality(
 ) {
     let known = &*memo;
     let judge = |&c: &CellId| -> Option<JudgedTet> {
-        if !complex.is_alive(c) {
+        if !complex.is_alive(c) || known.not_poor.get(c.index()).is_some_and(|&fine| fine) {
             return None;
         }
         Some(if known.refused_flips.still_refused(complex, c) {
@@ -307,6 +311,8 @@ fn cells_below_quality(
         };
         if poor {
             out.push(c);
+        } else if let Some(fine) = memo.not_poor.get_mut(c.index()) {
+            *fine = true;
         }
     }
 }

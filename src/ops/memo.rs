@@ -47,6 +47,11 @@ pub struct ImproveMemo {
     pub(crate) qualities: CellQualities,
     /// Scratch of the search for poor tets (its judgements, in order).
     pub(crate) judged: Vec<JudgedTet>,
+    /// Per tet alive when a 3D connectivity improvement started: found at
+    /// or above the flip threshold by one of its sweeps. Flips move no
+    /// vertex, so such a tet stays there (and is never refused: only tets
+    /// below are tried); the later sweeps skip it.
+    pub(crate) not_poor: Vec<bool>,
     /// 3D stars searched by smoothing and the search for degenerate cells,
     /// kept while no cell around their vertex changes (forgotten at every
     /// compaction).
