@@ -239,7 +239,10 @@ impl Connectivity for D3 {
                 if refused.still_refused(complex, c) {
                     continue;
                 }
-                if complex.improve_tet(c, 0.0).is_some() {
+                if complex
+                    .improve_tet_remembering(c, 0.0, &mut memo.refused_edges, &memo.qualities)
+                    .is_some()
+                {
                     changed += 1;
                 } else if complex.is_alive(c) {
                     refused.record(complex, c);

@@ -16,6 +16,8 @@
 //! The interface is never touched: the cells involved all carry the same label
 //! and the cavity boundary is kept.
 
+use super::memo::RefusedEdges;
+use super::CellQualities;
 use crate::complex::{CellId, Complex, Label, Rejection, VertexId};
 use crate::dim::{Dim, D3};
 use nalgebra::Vector3;
@@ -165,6 +167,23 @@ fn klincsek(
     (best[0][k - 1], Splits(split))
 }
 
+/// For an edge at the local corners `iu` and `iv` of a tet: the other two
+/// local corners `i < j`, and whether `(iu, iv, i, j)` is an even
+/// permutation of the corners (then the tet's corners in the order (u, v,
+/// corner `i`, corner `j`) are positively oriented, as the tet is).
+fn edge_frame(iu: usize, iv: usize) -> (usize, usize, bool) {
+    let mut others = (0..4).filter(|&k| k != iu && k != iv);
+    let (i, j) = (others.next().unwrap_or(0), others.next().unwrap_or(0));
+    let order = [iu, iv, i, j];
+    let mut inversions = 0;
+    for a in 0..4 {
+        for b in a + 1..4 {
+            inversions += usize::from(order[a] > order[b]);
+        }
+    }
+    (i, j, inversions % 2 == 0)
+}
+
 /// Layer `ops`: 3D flips (2-3, 3-2, edge removal).
 impl Complex<D3> {
     /// The 2-3 flip of the facet opposite local vertex `i` of `c`: replaces `c`
@@ -176,6 +195,21 @@ impl Complex<D3> {
     /// facet, [`Rejection::LowQuality`] when it would not improve, and
     /// [`Rejection::WouldInvert`] when the two tets do not form a convex pair.
     pub fn flip_23(&mut self, c: CellId, i: usize, margin: f64) -> Result<Flip3, Rejection> {
+        self.flip_23_known(c, i, margin, &CellQualities::default())
+    }
+
+    /// [`flip_23`](Self::flip_23) reading the qualities of the two tets
+    /// from `known` where it has them current. The three new tets are
+    /// judged on the quality formula first, which is never below the exact
+    /// quality: a flip it refuses is refused exactly too, and only the
+    /// others take the exact orientation tests.
+    fn flip_23_known(
+        &mut self,
+        c: CellId,
+        i: usize,
+        margin: f64,
+        known: &CellQualities,
+    ) -> Result<Flip3, Rejection> {
         if !self.is_alive(c) || i >= 4 {
             return Err(Rejection::Stale);
         }
@@ -202,12 +236,16 @@ impl Complex<D3> {
                 new.push((t, label));
             }
         }
-        let old_q = self.quality(c).min(self.quality(nb));
-        let new_q = new
-            .iter()
-            .map(|(t, _)| tet_quality(t.map(|v| self.position(v))))
-            .fold(1.0, f64::min);
-        if new_q <= old_q + margin {
+        let floor = self
+            .known_quality(c, known)
+            .min(self.known_quality(nb, known))
+            + margin;
+        let new_q = |quality: fn(&[Vector3<f64>]) -> f64| {
+            new.iter()
+                .map(|(t, _)| quality(&t.map(|v| self.position(v))))
+                .fold(1.0, f64::min)
+        };
+        if new_q(D3::quality_oriented) <= floor || new_q(D3::quality) <= floor {
             return Err(Rejection::LowQuality);
         }
         self.replace_cells(&[c, nb], &new)?;
@@ -234,23 +272,11 @@ impl Complex<D3> {
         let mut next: SmallVec<[(VertexId, VertexId); 16]> = SmallVec::new();
         for &t in tets.iter() {
             let cell = self.cell(t);
-            let mut others = cell.iter().copied().filter(|&w| w != u && w != v);
-            let (x, y) = (others.next()?, others.next()?);
-            // Parity of the permutation taking `cell` to (u, v, x, y).
-            let target = [u, v, x, y];
-            let mut perm = [0usize; 4];
-            for (k, w) in target.iter().enumerate() {
-                perm[k] = cell.iter().position(|c| c == w)?;
-            }
-            let mut inversions = 0;
-            for a in 0..4 {
-                for b in a + 1..4 {
-                    if perm[a] > perm[b] {
-                        inversions += 1;
-                    }
-                }
-            }
-            next.push(if inversions % 2 == 0 { (x, y) } else { (y, x) });
+            let iu = cell.iter().position(|&w| w == u)?;
+            let iv = cell.iter().position(|&w| w == v)?;
+            let (i, j, even) = edge_frame(iu, iv);
+            let (x, y) = (cell[i], cell[j]);
+            next.push(if even { (x, y) } else { (y, x) });
         }
         let mut ring = Ring::new();
         let mut cur = next[0].0;
@@ -290,7 +316,7 @@ impl Complex<D3> {
         }
         let (mut star, mut tets) = (self.take_list(), self.take_list());
         self.cells_of_edge(u, v, &mut star, &mut tets);
-        let result = self.remove_ring_edge(u, v, margin, &tets);
+        let result = self.remove_ring_edge(u, v, margin, &tets, &CellQualities::default());
         self.give_back(star);
         self.give_back(tets);
         result
@@ -301,39 +327,45 @@ impl Complex<D3> {
     /// of the star of `u`.
     fn remove_edge_of(
         &mut self,
-        c: CellId,
-        u: VertexId,
-        v: VertexId,
+        (c, u, v): (CellId, VertexId, VertexId),
         margin: f64,
+        known: &CellQualities,
     ) -> Result<Flip3, Rejection> {
         let mut tets = self.take_list();
         self.turn_around_edge(u, v, c, &mut tets);
-        let result = self.remove_ring_edge(u, v, margin, &tets);
+        let result = self.remove_ring_edge(u, v, margin, &tets, known);
         self.give_back(tets);
         result
     }
 
-    /// [`remove_edge`](Self::remove_edge) with the tets around the edge.
+    /// [`remove_edge`](Self::remove_edge) with the tets around the edge,
+    /// their qualities read from `known` where it has them current.
     fn remove_ring_edge(
         &mut self,
         u: VertexId,
         v: VertexId,
         margin: f64,
         tets: &[CellId],
+        known: &CellQualities,
     ) -> Result<Flip3, Rejection> {
         // (labels first: the ring of an edge on the interface is not needed)
         let label = self.label(*tets.first().ok_or(Rejection::Constrained)?);
         if tets.iter().any(|&t| self.label(t) != label) {
             return Err(Rejection::Constrained);
         }
+        // (a ring has as many vertices as the edge has tets: a larger one is
+        // refused without walking it)
+        if tets.len() > MAX_RING {
+            return Err(Rejection::Constrained);
+        }
         let ring = self
             .ring_of_edge(u, v, tets)
             .ok_or(Rejection::Constrained)?;
         let k = ring.len();
-        if k > MAX_RING {
-            return Err(Rejection::Constrained);
-        }
-        let old_q = tets.iter().map(|&t| self.quality(t)).fold(1.0, f64::min);
+        let old_q = tets
+            .iter()
+            .map(|&t| self.known_quality(t, known))
+            .fold(1.0, f64::min);
         let (pu, pv) = (self.position(u), self.position(v));
         let w: SmallVec<[Vector3<f64>; MAX_RING]> =
             ring.iter().map(|&x| self.position(x)).collect();
@@ -351,19 +383,51 @@ impl Complex<D3> {
     /// Tries to improve one low-quality tet: first removing each of its edges,
     /// then 2-3 flipping each of its facets. Returns the flip that succeeded.
     pub fn improve_tet(&mut self, c: CellId, margin: f64) -> Option<Flip3> {
+        self.improve_tet_remembering(
+            c,
+            margin,
+            &mut RefusedEdges::default(),
+            &CellQualities::default(),
+        )
+    }
+
+    /// The quality of `c`: from `known` if it has it current (the same
+    /// bits), else computed.
+    fn known_quality(&self, c: CellId, known: &CellQualities) -> f64 {
+        known.current(self, c).unwrap_or_else(|| self.quality(c))
+    }
+
+    /// [`improve_tet`](Self::improve_tet) skipping the edge removals
+    /// `refused` knows would be refused again (and recording the new
+    /// refusals), and reading the tets' qualities from `known` where it has
+    /// them current, for the improvement that tries many tets; `refused`
+    /// must be about tries with this `margin`.
+    pub(crate) fn improve_tet_remembering(
+        &mut self,
+        c: CellId,
+        margin: f64,
+        refused: &mut RefusedEdges,
+        known: &CellQualities,
+    ) -> Option<Flip3> {
         if !self.is_alive(c) {
             return None;
         }
+        refused.sync(self);
         let cell: [VertexId; 4] = D3::cell(self.cell(c));
         for a in 0..4 {
             for b in a + 1..4 {
-                if let Ok(f) = self.remove_edge_of(c, cell[a], cell[b], margin) {
-                    return Some(f);
+                let (u, v) = (cell[a], cell[b]);
+                if refused.still_refused(self, u, v) {
+                    continue;
+                }
+                match self.remove_edge_of((c, u, v), margin, known) {
+                    Ok(f) => return Some(f),
+                    Err(_) => refused.record(self, u, v),
                 }
             }
         }
         for i in 0..4 {
-            if let Ok(f) = self.flip_23(c, i, margin) {
+            if let Ok(f) = self.flip_23_known(c, i, margin, known) {
                 return Some(f);
             }
         }

@@ -22,6 +22,8 @@
 use super::{CellQualities, CellStamps, JudgedTet, StarCache};
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::{Dim, D2, D3};
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 /// A verdict: at move clock `clock`, when the cells alive had ids below `cells_below`.
 #[derive(Clone, Copy, Debug)]
@@ -42,6 +44,9 @@ pub struct ImproveMemo {
     /// Per tet (3D): when all of its flips were last refused; kept across
     /// calls (not forgotten by [`forget`](Self::forget)).
     pub(crate) refused_flips: RefusedFlips,
+    /// Per edge (3D): when its removal was last refused; about the complex
+    /// as numbered now (see [`RefusedEdges`]).
+    pub(crate) refused_edges: RefusedEdges,
     /// Per tet (3D): its quality while no corner moves, read by the search
     /// for tets to flip; kept across calls like the refused flips.
     pub(crate) qualities: CellQualities,
@@ -224,6 +229,82 @@ impl RefusedFlips {
     /// Carries the record through the compaction `complex` just made.
     pub(crate) fn follow_compaction<K: Dim>(&mut self, complex: &Complex<K>) {
         self.refused.follow_compaction(complex);
+    }
+}
+
+/// Per edge (3D): when its removal ([`Complex::improve_tet`](crate::complex::Complex::improve_tet)'s
+/// first tries) was last refused.
+///
+/// Poor tets share edges, and a tet tried again because the star of one
+/// corner changed tries all six edges again, most of them in rings nothing
+/// touched. The verdict on the edge `uv` depends on the tets around it,
+/// their corners' positions and their labels: all within the star of `u`.
+/// So a refusal at clock `t` stands while the star of `u` has not changed
+/// since ([`Complex::star_changed_at`]; both ends are checked) and no label
+/// has ([`Complex::relabels`]). Exact: the same flips result. About one
+/// complex as numbered now (forgotten at every compaction).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RefusedEdges {
+    refused: HashMap<(VertexId, VertexId), u64, BuildHasherDefault<EdgeHasher>>,
+    /// The complex's identity, compactions and relabellings the refusals
+    /// are about.
+    about: Option<(u64, u64, u64)>,
+}
+
+impl RefusedEdges {
+    /// Forgets the refusals unless they are about `complex` as it is now.
+    pub(crate) fn sync(&mut self, complex: &Complex<D3>) {
+        let about = Some((
+            complex.identity(),
+            complex.compactions(),
+            complex.relabels(),
+        ));
+        if self.about != about {
+            self.refused.clear();
+            self.about = about;
+        }
+    }
+
+    /// Whether the removal of the edge `uv` was refused and nothing around
+    /// it has changed since: trying again would be refused again.
+    #[inline]
+    pub(crate) fn still_refused(&self, complex: &Complex<D3>, u: VertexId, v: VertexId) -> bool {
+        self.refused
+            .get(&edge_key(u, v))
+            .is_some_and(|&t| complex.star_changed_at(u) <= t && complex.star_changed_at(v) <= t)
+    }
+
+    /// Records that the removal of the edge `uv` was refused now.
+    pub(crate) fn record(&mut self, complex: &Complex<D3>, u: VertexId, v: VertexId) {
+        self.refused.insert(edge_key(u, v), complex.move_clock());
+    }
+}
+
+/// The key of the edge `uv`, the same from either end.
+fn edge_key(u: VertexId, v: VertexId) -> (VertexId, VertexId) {
+    (u.min(v), u.max(v))
+}
+
+/// A multiplicative hash of vertex ids for [`RefusedEdges`] (the standard
+/// hasher resists adversarial keys, which ids are not, at several times
+/// the cost).
+#[derive(Clone, Copy, Debug, Default)]
+struct EdgeHasher(u64);
+
+impl Hasher for EdgeHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u32(&mut self, x: u32) {
+        self.write_u64(u64::from(x));
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
     }
 }
 
