@@ -22,8 +22,7 @@
 use super::{CellQualities, CellStamps, JudgedTet, StarCache};
 use crate::complex::{CellId, Complex, VertexId};
 use crate::dim::{Dim, D2, D3};
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
+use rustc_hash::FxHashMap;
 
 /// A verdict: at move clock `clock`, when the cells alive had ids below `cells_below`.
 #[derive(Clone, Copy, Debug)]
@@ -245,7 +244,7 @@ impl RefusedFlips {
 /// complex as numbered now (forgotten at every compaction).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct RefusedEdges {
-    refused: HashMap<(VertexId, VertexId), u64, BuildHasherDefault<EdgeHasher>>,
+    refused: FxHashMap<(VertexId, VertexId), u64>,
     /// The complex's identity, compactions and relabellings the refusals
     /// are about.
     about: Option<(u64, u64, u64)>,
@@ -283,29 +282,6 @@ impl RefusedEdges {
 /// The key of the edge `uv`, the same from either end.
 fn edge_key(u: VertexId, v: VertexId) -> (VertexId, VertexId) {
     (u.min(v), u.max(v))
-}
-
-/// A multiplicative hash of vertex ids for [`RefusedEdges`] (the standard
-/// hasher resists adversarial keys, which ids are not, at several times
-/// the cost).
-#[derive(Clone, Copy, Debug, Default)]
-struct EdgeHasher(u64);
-
-impl Hasher for EdgeHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
-        }
-    }
-    fn write_u32(&mut self, x: u32) {
-        self.write_u64(u64::from(x));
-    }
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
-    }
 }
 
 /// Whether the edge of `c` opposite corner `i` was tested since its quad
