@@ -4,9 +4,10 @@
 use crate::common::assert_valid;
 use dsc_seg::complex::Complex;
 use dsc_seg::dim::{Dim, D2, D3};
+use dsc_seg::dsc::SizingField;
 use dsc_seg::phantom::{junctions3d, shapes3d, Phantom2Kind};
 use dsc_seg::pipeline::mean_dice;
-use dsc_seg::segment::adaptive::{single_sample_edge, AdaptiveSizing, SizingParams};
+use dsc_seg::segment::adaptive::{single_sample_edge, AdaptiveSizing, Sizes, SizingParams};
 use dsc_seg::segment::models::Rigidity;
 use dsc_seg::segment::{
     Flow, ImageView, PhaseStats, Raster, SegmentParams, SegmentReport, Segmentation,
@@ -259,16 +260,18 @@ fn the_single_sample_edge_makes_a_cell_of_one_sample() {
     assert!((single_sample_edge::<D3>(1.0) - 2.04).abs() < 0.005);
 }
 
-/// The fine finish refines no surface cell below the edge of a regular
-/// tetrahedron of one voxel: at `L` = 3 voxels its `L/2` would ask for
-/// cells of 0.4 voxels.
-#[test]
-fn the_fine_finish_refines_no_cell_below_one_voxel() {
-    let l = 3.0;
-    let mut complex = Complex::<D3>::cuboid([18.0; 3], l).unwrap();
+/// A cube of side `side` meshed at `l`, its cells left of the middle
+/// labelled 1, and the field of an adaptive sizing over it whose finish asks
+/// for `finish`·`L` at the surface (one update, no cell statistics).
+fn finish_field_on_a_split_cube(
+    side: f64,
+    l: f64,
+    finish: f64,
+) -> (Complex<D3>, Sizes, SizingField) {
+    let mut complex = Complex::<D3>::cuboid([side; 3], l).unwrap();
     let left: Vec<_> = complex
         .cell_ids()
-        .filter(|&c| complex.cell_points(c).iter().map(|p| p.x).sum::<f64>() < 4.0 * 9.0)
+        .filter(|&c| complex.cell_points(c).iter().map(|p| p.x).sum::<f64>() < 2.0 * side)
         .map(|c| (c, 1))
         .collect();
     complex.set_labels(&left);
@@ -276,12 +279,22 @@ fn the_fine_finish_refines_no_cell_below_one_voxel() {
         adaptive: true,
         ..SizingParams::default()
     };
-    let sizes = params.sizes(3, 18.0, 1.0, l);
-    assert!(sizes.h_min <= 0.5 * l, "the test needs h_min at most L/2");
+    let sizes = params.sizes(3, side, 1.0, l);
     let (lo, hi) = complex.domain();
     let mut sizing = AdaptiveSizing::new::<D3>(&params, sizes, lo, hi);
-    sizing.refine_interfaces(0.5 * l);
+    sizing.refine_interfaces(finish * l);
     let field = sizing.update(&complex, &[], &PhaseStats::new(2)).clone();
+    (complex, sizes, field)
+}
+
+/// The fine finish refines no surface cell below the edge of a regular
+/// tetrahedron of one voxel: at `L` = 3 voxels its `L/2` would ask for
+/// cells of 0.4 voxels.
+#[test]
+fn the_fine_finish_refines_no_cell_below_one_voxel() {
+    let l = 3.0;
+    let (complex, sizes, field) = finish_field_on_a_split_cube(18.0, l, 0.5);
+    assert!(sizes.h_min <= 0.5 * l, "the test needs h_min at most L/2");
     let floor = single_sample_edge::<D3>(1.0);
     let (finest, _) = field.range().unwrap();
     assert!(
@@ -306,24 +319,9 @@ fn the_fine_finish_refines_no_cell_below_one_voxel() {
 /// the finer cells allows).
 #[test]
 fn the_fine_finish_asks_for_the_finer_size_only_at_the_surface() {
-    let (side, l) = (36.0, 6.0);
-    let mut complex = Complex::<D3>::cuboid([side; 3], l).unwrap();
-    let left: Vec<_> = complex
-        .cell_ids()
-        .filter(|&c| complex.cell_points(c).iter().map(|p| p.x).sum::<f64>() < 2.0 * side)
-        .map(|c| (c, 1))
-        .collect();
-    complex.set_labels(&left);
-    let params = SizingParams {
-        adaptive: true,
-        ..SizingParams::default()
-    };
-    let sizes = params.sizes(3, side, 1.0, l);
-    let (lo, hi) = complex.domain();
-    let mut sizing = AdaptiveSizing::new::<D3>(&params, sizes, lo, hi);
+    let l = 6.0;
+    let (complex, sizes, field) = finish_field_on_a_split_cube(36.0, l, 0.5);
     let finer = 0.5 * l;
-    sizing.refine_interfaces(finer);
-    let field = sizing.update(&complex, &[], &PhaseStats::new(2)).clone();
     let (mut touching, mut kept) = (0, 0);
     for c in complex.cell_ids() {
         let pts = complex.cell_points(c);
