@@ -162,7 +162,9 @@ impl<K: Dim> Complex<K> {
     /// Classes every vertex as [`from_arrays`](Self::from_arrays) would
     /// for a mesh of one phase whose vertex stars are each one piece (a
     /// triangulation of the box): interior, on the box faces its position
-    /// lies on. No star is walked.
+    /// lies on. No star is walked. Only for such meshes (the box
+    /// constructions' lattices): one phase is checked in debug builds, the
+    /// stars' being one piece is the caller's to know.
     fn classify_one_phase(&mut self) {
         debug_assert!(self.labels.iter().all(|&l| l == self.labels[0]));
         for v in 0..self.positions.len() {
@@ -194,7 +196,10 @@ impl<K: Dim> Complex<K> {
 /// The neighbour across every facet. Each facet is looked for among the
 /// facets met before it with the same smallest vertex (a vertex holds a few;
 /// their room is laid out by a counting sort): it is glued to the one it
-/// matches, or else kept for a later one. A facet held by more than two
+/// matches, or else kept for a later one. The look is linear in that
+/// vertex's facets, so a vertex of very high valence (a fan of thousands of
+/// cells given to `from_arrays`) costs the square of its valence; the
+/// meshes built here hold at most a few dozen per vertex. A facet held by more than two
 /// cells is rejected (non-manifold): of such facets, the one with the
 /// smallest key, naming its third cell.
 fn glue_facets<K: Dim>(

@@ -217,10 +217,12 @@ impl Connectivity for D3 {
         memo.qualities.sync(complex);
         memo.not_poor.clear();
         memo.not_poor.resize(complex.cell_capacity(), false);
+        let compactions = complex.compactions();
         let mut flips = 0;
         let mut poor = complex.take_list();
         let mut judged = std::mem::take(&mut memo.judged);
         for _sweep in 0..4 {
+            debug_assert_eq!(complex.compactions(), compactions, "not_poor is by cell id");
             let mut changed = 0;
             // (flips move no vertex, so a tet's quality, read before the
             // sweep, holds while it lives)

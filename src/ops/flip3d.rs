@@ -172,6 +172,10 @@ fn klincsek(
 /// permutation of the corners (then the tet's corners in the order (u, v,
 /// corner `i`, corner `j`) are positively oriented, as the tet is).
 fn edge_frame(iu: usize, iv: usize) -> (usize, usize, bool) {
+    debug_assert!(
+        iu != iv && iu < 4 && iv < 4,
+        "an edge has two distinct corners"
+    );
     let mut others = (0..4).filter(|&k| k != iu && k != iv);
     let (i, j) = (others.next().unwrap_or(0), others.next().unwrap_or(0));
     let order = [iu, iv, i, j];

@@ -54,7 +54,9 @@ pub struct ImproveMemo {
     /// Per tet alive when a 3D connectivity improvement started: found at
     /// or above the flip threshold by one of its sweeps. Flips move no
     /// vertex, so such a tet stays there (and is never refused: only tets
-    /// below are tried); the later sweeps skip it.
+    /// below are tried); the later sweeps skip it. Indexed by cell id:
+    /// valid because nothing compacts the complex during an improvement
+    /// and new cells take ids past the end (the vector is read with `get`).
     pub(crate) not_poor: Vec<bool>,
     /// 3D stars searched by smoothing and the search for degenerate cells,
     /// kept while no cell around their vertex changes (forgotten at every

@@ -108,8 +108,13 @@ pub struct SizingParams {
 /// cells with a facet on an interface ask for `interface_fraction·L` (at
 /// least `h_min`, and at least [`single_sample_edge`]: the finish refines
 /// no cell below the one sample it needs to hold) and the run goes on for
-/// `iterations` more iterations, then stops. The first of them may be a last flip round (`flip_round`);
-/// the others flip no label.
+/// `iterations` more iterations, then stops. The first of them may be a
+/// last flip round (`flip_round`); the others flip no label. The resize
+/// splits an edge longer than twice the size asked for, so below
+/// `L` = 2·2.04 voxels (the 3D default `L` = 3 among them) the floor leaves
+/// few interface edges to split, and the finish is mostly its iterations
+/// without flips on the surface at `L`; the figures below were measured
+/// with the refinement to `L/2`, before the floor.
 ///
 /// Why: a surface of flat facets about `L` long cuts a curved interface a
 /// fraction of a voxel inside or outside of it depending on where its
@@ -144,9 +149,9 @@ pub struct Finish {
     pub flip_round: bool,
     /// The rigidity β of the finish's iterations after its first, as a
     /// multiple of the run's (1: the run's β; the run's is restored after
-    /// the finish, and is the one reported). Each vertex of the refined
-    /// surface averages the region force over a quarter of the area it did
-    /// at `L`, so it follows more of the noise; a stiffer surface rests
+    /// the finish, and is the one reported). Each vertex of a surface
+    /// refined to `L/2` averages the region force over a quarter of the
+    /// area it did at `L`, so it follows more of the noise; a stiffer surface rests
     /// where the data put it over a wider patch, and two runs that took
     /// different paths rest closer together. The first iteration keeps the
     /// run's β: after a flip round its relabelled cells leave jagged
@@ -167,9 +172,9 @@ fn unit_factor() -> f64 {
 }
 
 impl Finish {
-    /// The 3D two-phase default: interfaces at `L/2` for 2 iterations (the
-    /// first moves the surface at `L` and refines it, the second moves the
-    /// refined surface). Against 3 iterations, 2 save 8–10 % of a 64³ or
+    /// The 3D two-phase default: interfaces at `L/2` (not below
+    /// [`single_sample_edge`]) for 2 iterations (the first moves the surface
+    /// at `L` and refines it, the second moves the refined surface). Against 3 iterations, 2 save 8–10 % of a 64³ or
     /// 128³ run's instructions and move the Dice against the truth by −0.0003
     /// to +0.0004 on the 64³ and 128³ two-phase phantoms (−0.0006 on the
     /// 48³ two balls); the 64-level re-encodings of the 48³ ones stay at
@@ -686,8 +691,8 @@ fn lower_at_interface_edges<K: Dim>(
 /// The edge length of the regular cell whose measure is one sample's, for
 /// samples `step` apart: 2.04 steps in 3D, 1.52 in 2D. The fine finish
 /// refines no surface cell below it. At the 3D default `L` = 3 voxels its
-/// `L/2` made tetrahedra of 0.4 voxels each along the surface; with this
-/// floor the 64³ and 128³ phantoms of `benches/compare` end with 22–42 %
+/// `L/2` made tetrahedra of 0.4 voxel volume each along the surface; with
+/// this floor the 64³ and 128³ phantoms of `benches/compare` end with 22–44 %
 /// fewer tetrahedra in 0.83–0.92× the instructions, at a Dice within
 /// −0.0008 and +0.0011 of the finer finish's (the 48³ two-phase volumes of
 /// the encoding test lose up to 0.0012; benches/RESULTS.md, "Speed, 3D",

@@ -191,7 +191,8 @@ fn on_blurred_edges_the_volume_is_the_models_optimum() {
     );
     // The mesh's facets, at L on the default mesh of this volume (the fine
     // finish refines no tetrahedron below one voxel), are chords inside the
-    // thin torus's curved surface: 1.55 % below the model.
+    // thin torus's curved surface, which puts the mesh's volume a little
+    // further below the model than the labels'.
     assert!(within(mesh, model, 0.02), "mesh {mesh} vs model {model}");
     // The partial-volume estimate reads the blurred rim back to the truth.
     assert!(within(pv, count, 0.02), "partial volume {pv} vs {count}");
