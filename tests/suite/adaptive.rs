@@ -154,12 +154,13 @@ fn coarse_to_fine_3d_keeps_the_dice_with_fewer_tets() {
 }
 
 /// The fine finish of the 3D two-phase default: once the stopping rule is
-/// met, the run goes on for the finish's iterations without flips, with
-/// the interface edges longer than twice `L/2` split (the resize splits an
-/// edge longer than twice its size), on a valid mesh and at least as
-/// accurate. At the default `L` = 3 voxels `L/2` is below the finish's floor
-/// of a tetrahedron of one voxel and the finish splits almost nothing, so
-/// the run takes `L` = 6.
+/// met, the run goes on for the finish's iterations without flips, on a
+/// valid mesh and at least as accurate, and its refinement splits the
+/// surface: more interface facets than the same iterations at `L` give,
+/// and no interface edge longer than twice `L/2` left (the resize splits an
+/// edge longer than twice its size). At the default `L` = 3 voxels `L/2` is
+/// below the finish's floor of a tetrahedron of one voxel and the finish
+/// splits almost nothing, so the run takes `L` = 6.
 #[test]
 fn the_3d_fine_finish_refines_the_interfaces_after_the_stopping_rule() {
     let ph = shapes3d::torus(32, 0.1, 2);
@@ -173,29 +174,38 @@ fn the_3d_fine_finish_refines_the_interfaces_after_the_stopping_rule() {
         .expect("the 3D two-phase default finishes");
     let mut plain = finished.clone();
     plain.sizing.finish = None;
+    let mut at_l = finished.clone();
+    if let Some(f) = at_l.sizing.finish.as_mut() {
+        f.interface_fraction = 1.0;
+    }
     let run = |params: SegmentParams| {
         let mut seg = Segmentation::<D3>::new(view, params).unwrap();
         let report = seg.run(|_| {});
         assert_valid(seg.complex());
         assert!(report.converged);
-        let (mut edges, mut long) = (0, 0);
+        let (mut facets, mut long) = (0, 0);
         for f in seg.complex().interface_facets() {
+            facets += 1;
             for k in 0..3 {
-                edges += 1;
                 long += usize::from((f.points[k] - f.points[(k + 1) % 3]).norm() > l);
             }
         }
         let dice = mean_dice(&seg.label_image(), &ph.truth, 2);
-        (report, long as f64 / edges as f64, dice)
+        (report, facets, long, dice)
     };
-    let (plain, plain_long, plain_dice) = run(plain);
-    let (finished, finished_long, finished_dice) = run(finished);
+    let (plain, _, plain_long, plain_dice) = run(plain);
+    let (_, at_l_facets, _, _) = run(at_l);
+    let (finished, facets, long, finished_dice) = run(finished);
     assert_eq!(finished.iterations, plain.iterations + finish.iterations);
     let last = &finished.history[plain.iterations..];
     assert!(last.iter().all(|r| r.flips == 0), "{last:?}");
     assert!(
-        plain_long > 0.0 && finished_long < 0.5 * plain_long,
-        "interface edges longer than L: {finished_long} finished, {plain_long} without"
+        plain_long > 0 && long == 0,
+        "interface edges longer than L: {long} finished, {plain_long} without"
+    );
+    assert!(
+        facets as f64 > 1.05 * at_l_facets as f64,
+        "{facets} interface facets finished, {at_l_facets} with the finish at L"
     );
     assert!(
         finished_dice > plain_dice - 0.002,
