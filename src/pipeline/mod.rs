@@ -316,9 +316,10 @@ fn warn_missed_objects<K: Raster>(
     };
     let found = missed_objects(image, seg.check_image(), labels, means, noise);
     let three_d = image.dims[2] > 1;
+    let adaptive = seg.params().sizing.adaptive;
     report
         .warnings
-        .extend(found.iter().map(|m| m.warning(three_d)));
+        .extend(found.iter().map(|m| m.warning(three_d, adaptive)));
     report.missed_objects = Some(found);
 }
 
