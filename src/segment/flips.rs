@@ -25,8 +25,8 @@ use rayon::prelude::*;
 pub struct Flipper {
     /// Pixel-dominant phase per cell (multiphase rule), `None` for no pixels.
     dominant: Vec<Option<Label>>,
-    /// Component index per cell.
-    comp: Vec<u32>,
+    /// Per cell: whether the component walk has reached it.
+    seen: Vec<bool>,
     stack: Vec<CellId>,
     members: Vec<CellId>,
     /// Per neighbouring label of the current component: shared interface measure.
@@ -291,6 +291,7 @@ impl Flipper {
     ) -> Option<Label> {
         let st = rule.cells[c.index()];
         let base = st.sse(m_own);
+        let sides = CellSides::of(complex, c);
         let mut best: Option<(f64, Label)> = None;
         let mut consider = |l: Label| {
             if l == own {
@@ -299,7 +300,7 @@ impl Flipper {
             let Some(m) = rule.phases.mean_of(l) else {
                 return;
             };
-            let de = st.sse(m) - base + rule.nu * added_length(complex, c, own, l);
+            let de = st.sse(m) - base + rule.nu * sides.added_length(own, l);
             if de < 0.0 && best.is_none_or(|(b, _)| de < b) {
                 best = Some((de, l));
             }
@@ -308,10 +309,9 @@ impl Flipper {
             consider(t);
         }
         // (tested here first: most cells are inside a phase)
-        for nb in complex.neighbours(c).iter().flatten() {
-            let l = complex.label(*nb);
-            if l != own {
-                consider(l);
+        for l in sides.labels[..K::NV].iter().flatten() {
+            if *l != own {
+                consider(*l);
             }
         }
         best.map(|(_, l)| l)
@@ -425,24 +425,29 @@ impl Flipper {
             return;
         }
         let cap = complex.cell_capacity();
-        self.comp.clear();
-        self.comp.resize(cap, u32::MAX);
-        let mut ncomp = 0u32;
+        self.seen.clear();
+        self.seen.resize(cap, false);
+        let (mut stack, mut members) = (
+            std::mem::take(&mut self.stack),
+            std::mem::take(&mut self.members),
+        );
+        stack.reserve(cap);
+        members.reserve(cap);
         for i in 0..cap as u32 {
             let start = CellId::new(i);
-            if !complex.is_alive(start) || self.comp[i as usize] != u32::MAX {
+            if self.seen[i as usize] || !complex.is_alive(start) {
                 continue;
             }
             let own = complex.label(start);
-            self.comp[i as usize] = ncomp;
-            self.stack.clear();
-            self.members.clear();
+            self.seen[i as usize] = true;
+            stack.clear();
+            members.clear();
             self.shared.clear();
-            self.stack.push(start);
+            stack.push(start);
             let mut acc = CellStats::default();
-            while let Some(c) = self.stack.pop() {
-                self.members.push(c);
-                let st = cells[c.index()];
+            while let Some(c) = stack.pop() {
+                members.push(c);
+                let st = &cells[c.index()];
                 acc.sum += st.sum;
                 acc.sum_sq += st.sum_sq;
                 acc.count += st.count;
@@ -452,9 +457,9 @@ impl Flipper {
                     let Some(nb) = *nb else { continue };
                     let l = complex.label(nb);
                     if l == own {
-                        if self.comp[nb.index()] == u32::MAX {
-                            self.comp[nb.index()] = ncomp;
-                            self.stack.push(nb);
+                        if !self.seen[nb.index()] {
+                            self.seen[nb.index()] = true;
+                            stack.push(nb);
                         }
                     } else {
                         let pts = pts.get_or_insert_with(|| complex.cell_points(c));
@@ -466,7 +471,6 @@ impl Flipper {
                     }
                 }
             }
-            ncomp += 1;
             let Some(m_own) = phases.mean_of(own) else {
                 continue;
             };
@@ -480,9 +484,10 @@ impl Flipper {
                 }
             }
             if let Some((_, l)) = best {
-                self.changes.extend(self.members.iter().map(|&c| (c, l)));
+                self.changes.extend(members.iter().map(|&c| (c, l)));
             }
         }
+        (self.stack, self.members) = (stack, members);
     }
 }
 
@@ -495,21 +500,46 @@ fn has_other_neighbour<K: Raster>(cx: &Complex<K>, c: CellId, own: Label) -> boo
         .any(|&nb| cx.label(nb) != own)
 }
 
-/// Interface length/area that relabelling `c` from `own` to `new` adds
-/// (negative if it removes more than it adds), ignoring simultaneous flips.
-fn added_length<K: Raster>(cx: &Complex<K>, c: CellId, own: Label, new: Label) -> f64 {
-    let pts = cx.cell_points(c);
-    let mut d = 0.0;
-    for (i, nb) in cx.neighbours(c).iter().enumerate() {
-        let Some(nb) = *nb else { continue };
-        let l = cx.label(nb);
-        if l == own {
-            d += K::facet_measure(&pts[..K::NV], i);
-        } else if l == new {
-            d -= K::facet_measure(&pts[..K::NV], i);
+/// The sides of one cell as the guard weighs them: per local index, the
+/// label of the neighbour across the facet opposite it (`None` on the domain
+/// border) and that facet's measure. Taken once per judged cell: every
+/// label the guard considers reads the same facets.
+struct CellSides {
+    labels: [Option<Label>; 4],
+    measures: [f64; 4],
+}
+
+impl CellSides {
+    /// The sides of cell `c` of `cx`.
+    fn of<K: Raster>(cx: &Complex<K>, c: CellId) -> Self {
+        let pts = cx.cell_points(c);
+        let mut sides = CellSides {
+            labels: [None; 4],
+            measures: [0.0; 4],
+        };
+        for (i, nb) in cx.neighbours(c).iter().enumerate() {
+            if let Some(nb) = *nb {
+                sides.labels[i] = Some(cx.label(nb));
+                sides.measures[i] = K::facet_measure(&pts[..K::NV], i);
+            }
         }
+        sides
     }
-    d
+
+    /// Interface length/area that relabelling the cell from `own` to `new`
+    /// adds (negative if it removes more than it adds), ignoring
+    /// simultaneous flips.
+    fn added_length(&self, own: Label, new: Label) -> f64 {
+        let mut d = 0.0;
+        for (l, m) in self.labels.iter().zip(&self.measures) {
+            match *l {
+                Some(l) if l == own => d += m,
+                Some(l) if l == new => d -= m,
+                _ => {}
+            }
+        }
+        d
+    }
 }
 
 #[cfg(test)]

@@ -572,12 +572,15 @@ impl PhaseStats {
             cells.len() >= complex.cell_capacity(),
             "a statistic per cell id"
         );
+        // (slices of one length: the loop indexes them without checks)
+        let phases = self.count.len();
+        let (count, sum) = (&mut self.count[..phases], &mut self.sum[..phases]);
         for (label, st) in complex.label_slots().zip(cells) {
-            let Some(l) = label.map(|l| l as usize).filter(|&l| l < self.count.len()) else {
+            let Some(l) = label.map(|l| l as usize).filter(|&l| l < phases) else {
                 continue;
             };
-            self.count[l] += st.count as u64;
-            self.sum[l] += st.sum;
+            count[l] += st.count as u64;
+            sum[l] += st.sum;
         }
         for k in 0..self.count.len() {
             if self.count[k] > 0 {
