@@ -136,6 +136,7 @@ impl<K: Dim> Complex<K> {
                 .collect(),
             labels,
             alive: vec![true; n_cells],
+            interface_cells: Default::default(),
             live_cells: n_cells,
             live_vertices,
             domain_min: min,
@@ -144,6 +145,7 @@ impl<K: Dim> Complex<K> {
         };
         // Built meshes come in grid (or TetGen's) order, local enough.
         complex.book.ordered_cells = n_cells;
+        complex.remark_all_interface_cells();
         Ok(complex)
     }
 
@@ -189,6 +191,7 @@ impl<K: Dim> Complex<K> {
             }
             self.labels[c.index()] = f(centroid * (1.0 / K::NV as f64));
         }
+        self.remark_all_interface_cells();
         self.reclassify_all();
     }
 }

@@ -303,6 +303,12 @@ impl<K: Dim> Complex<K> {
         if outside.iter().any(|e| !e.2) {
             return Err(Rejection::NonManifold);
         }
+        // The cells around the cavity: the only ones whose neighbours change.
+        let around: SmallVec<[CellId; INLINE]> = old
+            .iter()
+            .flat_map(|&c| self.neighbours(c).iter().flatten().copied())
+            .filter(|nb| !old.contains(nb))
+            .collect();
         // Commit.
         self.book.move_clock += 1;
         for &c in old {
@@ -345,6 +351,7 @@ impl<K: Dim> Complex<K> {
             }
         }
         self.live_cells += new.len();
+        self.remark_interface_cells_of_cavity(old, base..base + new.len() as u32, &around);
         // Vertices whose recorded cell died and that no new cell uses.
         for &c in old {
             for i in 0..K::NV {

@@ -27,10 +27,10 @@ pub struct InterfaceFacet<P> {
     pub measure: f64,
 }
 
-/// The iterator of [`Complex::interface_facets`]: a scan of the cells that
-/// looks only at labels until it meets an interface facet (most cells have
-/// none), so that walking the interface of a large mesh costs little more
-/// than reading its labels.
+/// The iterator of [`Complex::interface_facets`]: a scan of the cells with
+/// a neighbour of another label ([`Complex::meets_other_label`], one bit
+/// per cell), so that walking the interface of a large mesh costs little
+/// more than the interface itself.
 pub struct InterfaceFacets<'c, K: Dim> {
     complex: &'c Complex<K>,
     /// The cell being scanned.
@@ -55,17 +55,18 @@ impl<K: Dim> InterfaceFacets<'_, K> {
     #[inline]
     fn next_facet(&mut self) -> Option<(CellId, usize, Label)> {
         let cx = self.complex;
-        while self.cell < cx.slots.len() {
-            let c = self.cell;
-            if cx.alive[c] {
-                if let Some((i, b)) = cx.next_interface_facet(c, self.next_local) {
-                    self.next_local = i + 1;
-                    return Some((CellId::new(c as u32), i, b));
-                }
+        // (only the cells with a neighbour of another label can have one)
+        while let Some(c) = cx.interface_cells.next_from(self.cell) {
+            if c != self.cell {
+                (self.cell, self.next_local) = (c, 0);
             }
-            self.cell += 1;
-            self.next_local = 0;
+            if let Some((i, b)) = cx.next_interface_facet(c, self.next_local) {
+                self.next_local = i + 1;
+                return Some((CellId::new(c as u32), i, b));
+            }
+            (self.cell, self.next_local) = (c + 1, 0);
         }
+        self.cell = cx.slots.len();
         None
     }
 

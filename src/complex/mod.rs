@@ -13,6 +13,7 @@ mod cavity;
 mod class;
 mod export;
 mod interface;
+mod interface_cells;
 mod junction;
 mod measure;
 mod reorder;
@@ -54,6 +55,9 @@ pub struct Complex<K: Dim> {
     slots: Vec<Slot<K>>,
     labels: Vec<Label>,
     alive: Vec<bool>,
+    /// The live cells with a neighbour of another label (see
+    /// `interface_cells.rs`).
+    interface_cells: interface_cells::CellBits,
     live_cells: usize,
     live_vertices: usize,
     domain_min: K::Point,
@@ -388,6 +392,7 @@ impl<K: Dim> Complex<K> {
         if self.labels[c.index()] != label {
             self.book.relabels += 1;
             self.labels[c.index()] = label;
+            self.remark_interface_cells_around(c);
             self.reclassify_cells(&[c]);
         }
     }
@@ -397,6 +402,9 @@ impl<K: Dim> Complex<K> {
         self.book.relabels += 1;
         for &(c, l) in changes {
             self.labels[c.index()] = l;
+        }
+        for &(c, _) in changes {
+            self.remark_interface_cells_around(c);
         }
         let cells: Vec<CellId> = changes.iter().map(|&(c, _)| c).collect();
         self.reclassify_cells(&cells);
@@ -654,8 +662,11 @@ impl<K: Dim> Complex<K> {
                 }
                 self.slots[k] = slot;
                 self.labels[k] = self.labels[i];
+                let mark = self.interface_cells.contains(i);
+                self.interface_cells.set(k, mark);
             }
         }
+        self.interface_cells.resize(m);
         self.slots.truncate(m);
         self.labels.truncate(m);
         self.alive.truncate(m);

@@ -157,6 +157,7 @@ impl<K: Dim> Complex<K> {
             slot
         });
         self.labels = gather_from(&self.labels, order);
+        self.interface_cells = self.interface_cells.gathered(order);
     }
 }
 

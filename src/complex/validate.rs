@@ -65,6 +65,12 @@ pub enum Finding {
     },
     /// The live-element counters disagree with the arrays.
     CountMismatch,
+    /// A cell's interface bit ([`Complex::meets_other_label`]) differs
+    /// from what its neighbours' labels say.
+    StaleInterfaceMark {
+        /// The cell.
+        cell: CellId,
+    },
 }
 
 /// Layer `complex`: validation of every invariant.
@@ -122,6 +128,12 @@ impl<K: Dim> Complex<K> {
         }
         if live != self.live_cells {
             findings.push(Finding::CountMismatch);
+        }
+        for i in 0..self.slots.len() {
+            let cell = CellId::new(i as u32);
+            if self.meets_other_label(cell) != self.meets_other_label_now(cell) {
+                findings.push(Finding::StaleInterfaceMark { cell });
+            }
         }
         let mut live_vertices = 0;
         let mut star = Vec::new();

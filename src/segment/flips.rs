@@ -271,7 +271,9 @@ impl Flipper {
             return candidate;
         }
         // Nothing to consider (most cells: inside a phase, no candidate).
-        if candidate.is_none() && !has_other_neighbour(complex, c, own) {
+        // (a live cell of label `own`: its interface bit tells whether a
+        // neighbour has another label)
+        if candidate.is_none() && !complex.meets_other_label(c) {
             return None;
         }
         Self::judge(complex, rule, c, own, m_own, candidate)
@@ -489,15 +491,6 @@ impl Flipper {
         }
         (self.stack, self.members) = (stack, members);
     }
-}
-
-/// Whether a neighbour of `c` has a label other than `own`.
-#[inline(always)]
-fn has_other_neighbour<K: Raster>(cx: &Complex<K>, c: CellId, own: Label) -> bool {
-    cx.neighbours(c)
-        .iter()
-        .flatten()
-        .any(|&nb| cx.label(nb) != own)
 }
 
 /// The sides of one cell as the guard weighs them: per local index, the
