@@ -244,12 +244,16 @@ impl<K: Dim> Complex<K> {
         if !self.all_positive(new) {
             return Err(Rejection::WouldInvert);
         }
-        // Facets on the cavity boundary, with the cell outside (None: domain boundary).
+        // Facets on the cavity boundary, with the cell outside (None: domain
+        // boundary); the cells outside are the only ones whose neighbours
+        // change (`around`).
         let mut outside = Outside::new();
+        let mut around: SmallVec<[CellId; INLINE]> = SmallVec::new();
         for &c in old {
             for i in 0..K::NV {
                 let nb = self.neighbours(c)[i];
                 if nb.is_none_or(|n| !old.contains(&n)) {
+                    around.extend(nb);
                     let key = facet_key(self.cell(c), i);
                     match merge {
                         Some((removed, kept)) if key.contains(&removed.0) => {
@@ -303,12 +307,6 @@ impl<K: Dim> Complex<K> {
         if outside.iter().any(|e| !e.2) {
             return Err(Rejection::NonManifold);
         }
-        // The cells around the cavity: the only ones whose neighbours change.
-        let around: SmallVec<[CellId; INLINE]> = old
-            .iter()
-            .flat_map(|&c| self.neighbours(c).iter().flatten().copied())
-            .filter(|nb| !old.contains(nb))
-            .collect();
         // Commit.
         self.book.move_clock += 1;
         for &c in old {
