@@ -1566,16 +1566,13 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     }
 
     /// The interface measure of the current mesh for the energy's length
-    /// term: summed facet by facet along [`Complex::interface_facets`], or
-    /// taken from the paper's field when the last force evaluation computed
-    /// it (the same sum in the same order).
+    /// term: [`interface_measure`](Self::interface_measure), or taken from
+    /// the paper's field when the last force evaluation computed it (the
+    /// same sum in the same order).
     fn interface_length(&self) -> f64 {
         match self.models.paper_field(self.evaluations) {
             Some(f) => f.field().interface_measure,
-            None => self
-                .complex
-                .interface_facets()
-                .fold(0.0, |total, f| total + f.measure),
+            None => self.interface_measure(),
         }
     }
 
@@ -1818,20 +1815,12 @@ impl<'a, K: Raster> Segmentation<'a, K> {
         }
     }
 
-    /// Total interface measure of the current mesh.
+    /// Total interface measure of the current mesh, summed facet by facet
+    /// along [`Complex::interface_facets`].
     pub fn interface_measure(&self) -> f64 {
-        let mut total = 0.0;
-        for c in self.complex.cell_ids() {
-            for (i, nb) in self.complex.neighbours(c).iter().enumerate() {
-                if let Some(nb) = *nb {
-                    if nb.index() > c.index() && self.complex.label(nb) != self.complex.label(c) {
-                        let pts = self.complex.cell_points(c);
-                        total += K::facet_measure(&pts[..K::NV], i);
-                    }
-                }
-            }
-        }
-        total
+        self.complex
+            .interface_facets()
+            .fold(0.0, |total, f| total + f.measure)
     }
 
     /// Mesh label → output phase index, phases ordered by increasing mean

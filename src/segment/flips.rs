@@ -433,6 +433,8 @@ impl Flipper {
             std::mem::take(&mut self.stack),
             std::mem::take(&mut self.members),
         );
+        stack.clear();
+        members.clear();
         stack.reserve(cap);
         members.reserve(cap);
         for i in 0..cap as u32 {
