@@ -523,6 +523,7 @@ pub(crate) fn segment_image_then<T>(
     };
     let ClampedInput {
         data: clamped,
+        outlier_extremes,
         robust_range,
     } = clamp_input(image.data(), [w, h, 1], file_value, "pixels");
     let data = clamped.as_ref().map_or(image.data(), |(c, _)| c.as_slice());
@@ -602,7 +603,7 @@ pub(crate) fn segment_image_then<T>(
     let input = InputSummary::new(
         (image.sample_type(), image.colour(), image.selection()),
         intensity,
-        &report,
+        (&report, outlier_extremes),
         &run.ordered_means,
     );
     let rep = Report {
@@ -614,9 +615,10 @@ pub(crate) fn segment_image_then<T>(
     };
     let mut report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
     let order = seg.phase_order();
-    let measurements =
-        Measurements::from_labels(&labels, image.data(), intensity, &frame, params.phases)
-            .with_mesh_2d(seg.complex(), &order, &frame);
+    // (the samples the segmentation saw: an outlier it clamped would count
+    // in the partial-volume estimate as a large fraction of a phase)
+    let measurements = Measurements::from_labels(&labels, data, intensity, &frame, params.phases)
+        .with_mesh_2d(seg.complex(), &order, &frame);
     add_frame_and_phases(&mut report_json, &frame, &measurements)?;
     let shown = display_image(image, &report).into_owned();
     let result = Segmented {

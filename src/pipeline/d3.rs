@@ -353,6 +353,7 @@ pub(crate) fn segment_volume_then<T>(
     };
     let ClampedInput {
         data: clamped,
+        outlier_extremes,
         robust_range,
     } = clamp_input(volume.data(), dims, file_value, "voxels");
     let data = clamped
@@ -419,7 +420,7 @@ pub(crate) fn segment_volume_then<T>(
     let input = InputSummary::new(
         (volume.sample_type(), Colour::Gray, volume.selection()),
         volume.intensity(),
-        &report,
+        (&report, outlier_extremes),
         &run.ordered_means,
     );
     let rep = Report {
@@ -431,14 +432,10 @@ pub(crate) fn segment_volume_then<T>(
         quality: quality(complex),
     };
     let mut report_json = serde_json::to_value(&rep).map_err(|e| Error::Usage(e.to_string()))?;
-    let measurements = Measurements::from_labels(
-        &labels,
-        volume.data(),
-        volume.intensity(),
-        &frame,
-        params.phases,
-    )
-    .with_mesh_3d(complex, &order, &frame);
+    // (the samples the segmentation saw, as in 2D)
+    let measurements =
+        Measurements::from_labels(&labels, data, volume.intensity(), &frame, params.phases)
+            .with_mesh_3d(complex, &order, &frame);
     add_frame_and_phases(&mut report_json, &frame, &measurements)?;
     let arrays = complex.to_arrays();
     let cell_phases = arrays

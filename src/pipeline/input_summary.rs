@@ -32,9 +32,10 @@ pub(crate) struct InputSummary {
     /// The unit of `min`, `max` and `phase_means`: [`FILE_UNIT`], or
     /// [`NORMALISED_UNIT`] for a phantom (an array's values count as a file's).
     intensity_unit: &'static str,
-    /// The smallest sample, exactly as stored.
+    /// The smallest sample, exactly as stored (an outlier the segmentation
+    /// clamped included).
     min: f64,
-    /// The largest sample, exactly as stored.
+    /// The largest sample, exactly as stored (likewise).
     max: f64,
     /// The final phase means by output value (0, 1, ...; ascending), in
     /// `intensity_unit`; `null` for a phase with no cell.
@@ -51,15 +52,21 @@ pub(crate) struct InputSummary {
 impl InputSummary {
     /// The summary of an input of `sample_type` and `colour`, the pages
     /// `selection` of its file, whose loaded values map back to the file's
-    /// by `map` (`None`: no file), from the run's `report` and its final
-    /// means by output value, `ordered_means`.
+    /// by `map` (`None`: no file), from the run's `report`, the extremes
+    /// of the outliers it clamped (loaded values; `None`: none) and its
+    /// final means by output value, `ordered_means`. The normalised means
+    /// are stretched over the range the segmentation saw, without the
+    /// outliers: one hot pixel would squeeze them all towards 0.
     pub(crate) fn new(
         (sample_type, colour, selection): (SampleType, Colour, Selection),
         map: Option<IntensityMap>,
-        report: &SegmentReport,
+        (report, outlier_extremes): (&SegmentReport, Option<(f32, f32)>),
         ordered_means: &[Option<f64>],
     ) -> Self {
         let (lo, hi) = (report.intensity.min, report.intensity.max);
+        let (stored_lo, stored_hi) = outlier_extremes.map_or((lo, hi), |(low, high)| {
+            (lo.min(f64::from(low)), hi.max(f64::from(high)))
+        });
         let loaded_unit = match map {
             Some(m) if m.is_identity() => FILE_UNIT,
             _ => NORMALISED_UNIT,
@@ -81,8 +88,8 @@ impl InputSummary {
             } else {
                 NORMALISED_UNIT
             },
-            min: to_file.original_sample(lo, sample_type),
-            max: to_file.original_sample(hi, sample_type),
+            min: to_file.original_sample(stored_lo, sample_type),
+            max: to_file.original_sample(stored_hi, sample_type),
             phase_means: ordered_means
                 .iter()
                 .map(|m| m.map(|m| to_file.original(m)))

@@ -353,6 +353,9 @@ pub(crate) struct ClampedInput {
     /// The clamped samples and the warning that says so (`None`: the
     /// samples stand as they are).
     pub data: Option<(Vec<f32>, String)>,
+    /// The lowest and highest of the samples clamped, as loaded (`None`:
+    /// none was): with the clamped data's own extremes, the input's.
+    pub outlier_extremes: Option<(f32, f32)>,
     /// The robust range the clamp selected of samples that stand, for
     /// [`ImageView::with_robust_range`](crate::segment::ImageView::with_robust_range).
     pub robust_range: Option<(f64, f64)>,
@@ -371,6 +374,7 @@ pub(crate) fn clamp_input(
 ) -> ClampedInput {
     let clamp = clamp_outliers_keeping_range(data, dims);
     ClampedInput {
+        outlier_extremes: clamp.clamped.as_ref().map(|(_, o)| o.extremes),
         data: clamp
             .clamped
             .map(|(clamped, outliers)| (clamped, outlier_warning(&outliers, file_value, samples))),
@@ -415,8 +419,8 @@ fn outlier_warning(o: &Outliers, file_value: impl Fn(f32) -> f64, samples: &str)
         (samples, "lie", "them", "they")
     };
     format!(
-        "{} {samples} {lie} {where_}: {kind}; the segmentation counts {them} as {taken}, \
-         so that {they} cannot pull a phase's mean",
+        "{} {samples} {lie} {where_}: {kind}; the segmentation and the measurements count \
+         {them} as {taken}, so that {they} cannot pull a phase's mean or size",
         o.count
     )
 }

@@ -325,7 +325,10 @@ fn a_16_bit_volume_reports_means_in_its_own_units() {
 /// A 16-bit image whose phases use a thousandth of the range: a handful of
 /// hot pixels at 65535 would pull the brightest phase's mean past the next
 /// one's (the data term is a sum of squares); clamped, they change no label
-/// but their own, and the run says so.
+/// but their own, and the run says so. The measurements count them clamped
+/// too (unclamped, each hot pixel in a dark phase counted in the
+/// partial-volume areas as hundreds of pixels of the bright one), and the
+/// report's range is still the file's.
 #[test]
 fn a_few_hot_pixels_do_not_move_the_phases() {
     use dsc_seg::pipeline::{segment_image, Provenance};
@@ -364,4 +367,25 @@ fn a_few_hot_pixels_do_not_move_the_phases() {
         .warnings
         .iter()
         .any(|w| w.contains("far above")));
+    for (a, b) in clean
+        .measurements
+        .phases
+        .iter()
+        .zip(&with_hot.measurements.phases)
+    {
+        let moved = (a.partial_volume - b.partial_volume).abs();
+        assert!(moved < 10.0, "phase {}: area moved by {moved} px", a.phase);
+        let spread = (a.std.unwrap() - b.std.unwrap()).abs();
+        assert!(
+            spread < 0.2 * a.std.unwrap(),
+            "phase {}: std {:?}",
+            a.phase,
+            b.std
+        );
+    }
+    assert_eq!(with_hot.report["input"]["max"].as_f64(), Some(65535.0));
+    assert_eq!(
+        clean.report["input"]["max"].as_f64(),
+        Some(f64::from(*dim.iter().max().unwrap()))
+    );
 }
