@@ -436,6 +436,7 @@ pub fn with_init_labels(
 
 impl Job for SegmentJob {
     type Input = Image2;
+    const THREE_D: bool = false;
 
     fn source(&self) -> &Source {
         &self.source

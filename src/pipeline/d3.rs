@@ -268,6 +268,7 @@ pub fn run_segment3d(job: &Segment3dJob) -> Result<SegmentReport> {
 
 impl Job for Segment3dJob {
     type Input = Volume;
+    const THREE_D: bool = true;
 
     fn source(&self) -> &Source {
         &self.source

@@ -68,6 +68,8 @@ pub enum Source {
 pub trait Job {
     /// The loaded input: a 2D image or a 3D volume.
     type Input;
+    /// Whether the input is a 3D volume (its outputs' names differ).
+    const THREE_D: bool;
 
     /// Where the input comes from.
     fn source(&self) -> &Source;
@@ -98,6 +100,7 @@ pub trait Job {
     /// into the output directory (checked after the parameters, before any
     /// work), all or none of them.
     fn run(&self) -> Result<SegmentReport> {
+        self.refuse_replacing_inputs()?;
         let t_load = Instant::now();
         let (input, truth) = self.load()?;
         let params = self.params_for(&input)?;
@@ -117,6 +120,42 @@ pub trait Job {
         Ok(result.summary)
     }
 }
+
+/// The check that a job's outputs spare its inputs (off the public [`Job`] trait).
+trait SparesInputs: Job {
+    /// Refuses a run that would publish one of its outputs over its own
+    /// input file or its label file (`labels.png` segmented with `--out` set
+    /// to its own folder): the user's data would be replaced by the result.
+    fn refuse_replacing_inputs(&self) -> Result<()> {
+        let Source::File(input) = self.source() else {
+            return Ok(());
+        };
+        // (an output folder that does not exist yet holds no input)
+        let Ok(out) = self.out().canonicalize() else {
+            return Ok(());
+        };
+        let written = self.outputs().files_for(Self::THREE_D, input);
+        for file in std::iter::once(input.as_path()).chain(self.init_labels()) {
+            let Ok(full) = file.canonicalize() else {
+                continue;
+            };
+            let name = full.file_name().and_then(|n| n.to_str());
+            if full.parent() == Some(out.as_path()) && name.is_some_and(|n| written.contains(&n)) {
+                return Err(Error::OutputDir {
+                    path: self.out().to_path_buf(),
+                    reason: format!(
+                        "the run would replace its input {} with an output of the same name; \
+                         choose another --out",
+                        file.display()
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+impl<J: Job + ?Sized> SparesInputs for J {}
 
 /// A phantom's true labels (phases by increasing mean).
 #[derive(Clone, Debug)]

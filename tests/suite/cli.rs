@@ -266,6 +266,37 @@ fn phantom_subcommand_writes_image_and_truth() {
     assert!(String::from_utf8_lossy(&o.stderr).starts_with("error: unknown phantom"));
 }
 
+/// An input in the output folder under an output's name (`labels.png`
+/// segmented into its own folder) is refused before any work, and left as
+/// it was; another image in the same folder is segmented there.
+#[test]
+fn an_input_named_as_an_output_is_not_replaced() {
+    let d = tmp();
+    let input = d.path().join("labels.png");
+    std::fs::rename(write_image(d.path(), 40, 32), &input).unwrap();
+    let before = std::fs::read(&input).unwrap();
+    let o = bin()
+        .args(["segment", "--quiet", "--out"])
+        .arg(d.path())
+        .arg(&input)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("would replace its input"), "{err}");
+    assert_eq!(std::fs::read(&input).unwrap(), before);
+    assert!(!d.path().join("report.json").exists());
+    let other = write_image(d.path(), 40, 32);
+    let o = bin()
+        .args(["segment", "--quiet", "--outputs", "report", "--out"])
+        .arg(d.path())
+        .arg(&other)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read(&input).unwrap(), before);
+}
+
 #[test]
 fn missing_file() {
     let d = tmp();
