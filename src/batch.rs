@@ -1,6 +1,7 @@
 //! Batch runs: many inputs (files, or folders of them) into one output
 //! directory, `DIR/<stem>/` per input (inputs of one stem take their folders' names,
-//! `s1_img`), with a summary table `DIR/summary.csv`.
+//! `s1_img`, or in one folder their whole names, `img_png`), with a summary table
+//! `DIR/summary.csv`.
 //!
 //! - A bad input fails its own row; the others still run.
 //! - An input whose outputs are complete and were made by the same command
@@ -637,9 +638,10 @@ impl Batch {
 
 /// Each input's output folder name: its [`stem`], or, where several
 /// inputs share a stem (`s1/img.png`, `s2/img.png`), the stem after as many
-/// of its parent folders' names as tell them apart (`s1_img`, `s2_img`).
-/// Inputs that no parent tells apart (one file named twice) are refused,
-/// every clash in one message.
+/// of its parent folders' names as tell them apart (`s1_img`, `s2_img`),
+/// or, for inputs of one folder (`img.png`, `img.tif`), their whole names
+/// (`img_png`, `img_tif`). Names that still clash (a name so made that is
+/// another input's stem) are refused, every clash in one message.
 fn output_names(inputs: &[PathBuf]) -> Result<Vec<String>> {
     let mut by_stem: HashMap<String, Vec<usize>> = HashMap::new();
     for (i, p) in inputs.iter().enumerate() {
@@ -665,23 +667,43 @@ fn output_names(inputs: &[PathBuf]) -> Result<Vec<String>> {
                     names[i] = format!("{}_{name}", parts.join("_"));
                 }
             }
+            // One folder holds them all (`img.png`, `img.tif`): their
+            // whole names, the extension's dot made an underscore.
             None => {
-                let listed: Vec<String> = group
-                    .iter()
-                    .map(|&i| inputs[i].display().to_string())
-                    .collect();
-                clashes.push(format!("{} would all write {name:?}", listed.join(", ")));
+                for &i in group {
+                    names[i] = whole_name(&inputs[i]);
+                }
             }
         }
+    }
+    // (a name made above may be another input's stem: `img_png.jpg`)
+    let mut by_name: HashMap<&str, Vec<usize>> = HashMap::new();
+    for (i, name) in names.iter().enumerate() {
+        by_name.entry(name).or_default().push(i);
+    }
+    for (name, group) in by_name.iter().filter(|(_, g)| g.len() > 1) {
+        let listed: Vec<String> = group
+            .iter()
+            .map(|&i| inputs[i].display().to_string())
+            .collect();
+        clashes.push(format!("{} would all write {name:?}", listed.join(", ")));
     }
     if !clashes.is_empty() {
         clashes.sort();
         return Err(Error::Usage(format!(
-            "inputs {}; name each file once",
+            "inputs {}; rename one of each",
             clashes.join("; ")
         )));
     }
     Ok(names)
+}
+
+/// `path`'s file name with every dot an underscore (`img.nii.gz`:
+/// `img_nii_gz`), the output folder name of an input whose stem another
+/// file in the same folder shares.
+fn whole_name(path: &Path) -> String {
+    path.file_name()
+        .map_or_else(|| stem(path), |n| n.to_string_lossy().replace('.', "_"))
 }
 
 /// The names of the folders that hold `path`, outermost first (of its
@@ -767,12 +789,25 @@ mod tests {
         // the same folder name twice: one more level
         let deeper = [p("u/day1/img.png"), p("v/day1/img.png")];
         assert_eq!(output_names(&deeper).unwrap(), ["u_day1_img", "v_day1_img"]);
-        // one folder, one stem: nothing tells them apart, every clash named
-        let same = [p("z/a.png"), p("z/a.tif"), p("z/c.png"), p("z/c.jpg")];
-        let err = output_names(&same).unwrap_err().to_string();
+        // one folder, one stem: the whole file names
+        let same = [p("z/a.png"), p("z/a.tif"), p("z/c.png"), p("z/c.nii.gz")];
+        assert_eq!(
+            output_names(&same).unwrap(),
+            ["a_png", "a_tif", "c_png", "c_nii_gz"]
+        );
+        // a name so made that another input has as its stem: every clash named
+        let clash = [
+            p("z/a.png"),
+            p("z/a.tif"),
+            p("z/a_png.jpg"),
+            p("y/b.png"),
+            p("y/b_tif.png"),
+            p("y/b.tif"),
+        ];
+        let err = output_names(&clash).unwrap_err().to_string();
         assert!(
-            err.contains("z/a.png, z/a.tif would all write \"a\"")
-                && err.contains("z/c.png, z/c.jpg would all write \"c\""),
+            err.contains("z/a.png, z/a_png.jpg would all write \"a_png\"")
+                && err.contains("y/b_tif.png, y/b.tif would all write \"b_tif\""),
             "{err}"
         );
     }
