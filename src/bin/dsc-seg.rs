@@ -63,7 +63,7 @@ struct BatchArgs {
     outputs: String,
     /// Inputs segmented at once, each on one thread, at least 1 (checked
     /// for a single input too) [default: the number of cores].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = parse_jobs)]
     jobs: Option<std::num::NonZeroUsize>,
     /// Only inputs I, I+N, I+2N, ... of the list (0 <= I < N), for job
     /// arrays on a cluster; the summary is then summary-I-of-N.csv.
@@ -501,4 +501,14 @@ fn main() -> ExitCode {
     };
     eprintln!("error: {}", e.to_string().replace('\n', " "));
     ExitCode::from(code)
+}
+
+/// A `--jobs` value: a whole number, at least 1 (clap's own message for 0
+/// is the library's "number would be zero for non-zero type").
+fn parse_jobs(s: &str) -> std::result::Result<std::num::NonZeroUsize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a whole number"))?;
+    std::num::NonZeroUsize::new(n).ok_or_else(|| "at least 1 input runs at a time".into())
 }

@@ -34,7 +34,7 @@ pub enum SegmentError {
     #[error("edge length {0:?}: {1}")]
     EdgeLength(f64, String),
     /// Another parameter is out of range: its name, value and valid range.
-    #[error("parameter {0} = {1:?} is out of range: {2}")]
+    #[error("parameter {} = {} is out of range: {}", .0, short_number(*.1), .2)]
     Param(&'static str, f64, &'static str),
     /// Eq. (5) is defined for two phases only.
     #[error("the Chan–Vese force (eq. 5) needs exactly 2 phases, not {0}")]
@@ -66,5 +66,16 @@ impl SegmentError {
                 | SegmentError::ChanVeseNeedsTwoPhases(_)
                 | SegmentError::InitOption(_)
         )
+    }
+}
+
+/// `v` as a user typed it: a whole number without a decimal point (a count
+/// such as `max_iterations = 0`), any other the shortest way that reads
+/// back exactly (`{:?}` keeps 1e-9 and 1e300 short).
+fn short_number(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:?}")
     }
 }
