@@ -1824,13 +1824,17 @@ impl<'a, K: Raster> Segmentation<'a, K> {
     }
 
     /// Mesh label → output phase index, phases ordered by increasing mean
-    /// (phases without a mean last, in label order).
+    /// (empty phases last, in label order: the mean an empty phase keeps
+    /// for the flips is the mean of nothing, and ranked by it the empty
+    /// phases fell between the others, a two-phase result of ten asked
+    /// for writing the values 0 and 8).
     pub fn phase_order(&self) -> Vec<u8> {
         let n = self.params.phases;
+        let means = self.present_means();
         let mut idx: Vec<usize> = (0..n).collect();
         idx.sort_by(|&a, &b| {
-            let ma = self.phases.mean[a].unwrap_or(f64::INFINITY);
-            let mb = self.phases.mean[b].unwrap_or(f64::INFINITY);
+            let ma = means[a].unwrap_or(f64::INFINITY);
+            let mb = means[b].unwrap_or(f64::INFINITY);
             ma.total_cmp(&mb).then(a.cmp(&b))
         });
         let mut map = vec![0u8; n];

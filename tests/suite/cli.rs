@@ -297,6 +297,43 @@ fn an_input_named_as_an_output_is_not_replaced() {
     assert_eq!(std::fs::read(&input).unwrap(), before);
 }
 
+/// A two-phase image segmented into more phases than it holds: the phases
+/// that end empty come after the others, so the labels are 0 and 1 and the
+/// report's means are those of phases 0 and 1, the rest `null` (ranked by
+/// the mean an empty phase keeps for the flips, the bright phase was
+/// written as 3 of 4).
+#[test]
+fn empty_phases_are_numbered_last() {
+    let d = tmp();
+    let input = write_image(d.path(), 64, 64);
+    let out = d.path().join("out");
+    let o = bin()
+        .args([
+            "segment",
+            "--quiet",
+            "--phases",
+            "4",
+            "--outputs",
+            "labels,report",
+            "--out",
+        ])
+        .arg(&out)
+        .arg(&input)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let means = report["ordered_means"].as_array().unwrap();
+    assert!(means[0].is_number() && means[1].is_number(), "{means:?}");
+    assert!(means[2].is_null() && means[3].is_null(), "{means:?}");
+    let labels = image::open(out.join("labels.png")).unwrap().into_luma8();
+    let mut values: Vec<u8> = labels.pixels().map(|p| p[0]).collect();
+    values.sort_unstable();
+    values.dedup();
+    assert_eq!(values, [0, 1]);
+}
+
 #[test]
 fn missing_file() {
     let d = tmp();
