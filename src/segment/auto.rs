@@ -34,6 +34,7 @@
 //! its phases are regions of constant mean, and the model with one more
 //! phase is kept only if the data support a new constant region.
 
+use super::driver::StopReason;
 use super::error::SegmentError;
 use super::image::ImageView;
 use super::integrate::PhaseStats;
@@ -68,9 +69,12 @@ pub struct PhaseTrial {
     /// kept even when not accepted, as the fewest there are: the choice's
     /// warnings say so.
     pub reason: Option<String>,
-    /// Whether the run converged before the iteration cap (a run stopped
-    /// at the cap is judged as it stood, and the choice warns).
+    /// Whether the run converged (its stopping rule met).
     pub converged: bool,
+    /// Whether the run stopped at the iteration cap: it is judged as it
+    /// stood, and the choice warns (a run whose labels kept swapping did
+    /// not converge either, but ran out of nothing).
+    pub stopped_at_cap: bool,
     /// Thickness of the thinnest phase that lies between two others (see
     /// the module documentation), in pixels; infinite (`null` in the
     /// report) when none does.
@@ -111,7 +115,7 @@ impl PhaseChoice {
         let counts: Vec<String> = self
             .trials
             .iter()
-            .filter(|t| t.phases <= self.phases && !t.converged)
+            .filter(|t| t.phases <= self.phases && t.stopped_at_cap)
             .map(|t| t.phases.to_string())
             .collect();
         (!counts.is_empty()).then(|| {
@@ -197,6 +201,7 @@ pub fn choose_phases<K: Raster>(
             accepted,
             reason,
             converged: report.converged,
+            stopped_at_cap: report.stop_reason == StopReason::MaxIterations,
             thinnest,
             data_energy: report.history.last().map_or(f64::NAN, |r| r.data_energy),
             iterations: report.iterations,
