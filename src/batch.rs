@@ -213,7 +213,9 @@ pub fn expand_inputs(paths: &[PathBuf], three_d: bool) -> Result<Vec<PathBuf>> {
 /// The subfolders of the 2D batch folders among `paths` that hold images:
 /// a folder's images are taken from it alone, so these are left out unless
 /// named as inputs themselves (however the path is spelt), and the command
-/// line says so. Each is listed once.
+/// line says so. Each is listed once. A batch's own output folders (with
+/// its completion [`MARKER`]: a folder segmented into itself) are not
+/// listed: their images are results.
 pub fn image_subfolders(paths: &[PathBuf], three_d: bool) -> Vec<PathBuf> {
     if three_d {
         return Vec::new();
@@ -224,7 +226,8 @@ pub fn image_subfolders(paths: &[PathBuf], three_d: bool) -> Vec<PathBuf> {
         .iter()
         .filter(|p| is_batch_folder(p, false))
         .flat_map(|p| sorted_entries(p).unwrap_or_default())
-        .filter(|e| e.is_dir() && folder_images(e).is_ok_and(|i| !i.is_empty()))
+        .filter(|e| e.is_dir() && !e.join(MARKER).is_file())
+        .filter(|e| folder_images(e).is_ok_and(|i| !i.is_empty()))
         .filter(|e| taken.insert(canonical(e)))
         .collect()
 }

@@ -567,4 +567,16 @@ fn subfolders_left_out_are_named_and_a_file_named_twice_runs_once() {
     let err = String::from_utf8_lossy(&done.stderr);
     assert!(done.status.success() && !err.contains("note:"), "{err}");
     assert_eq!(summary(&d.path().join("out2").join("summary.csv")).len(), 3);
+
+    // A folder segmented into itself: its output folders hold result
+    // images, not images left out, the second time as the first.
+    let own = d.path().join("own");
+    std::fs::create_dir(&own).unwrap();
+    write_disk(&own, "c.png", 40, 2);
+    for _ in 0..2 {
+        let done = run(&["--quiet", "--force"], &[&own], &own);
+        let err = String::from_utf8_lossy(&done.stderr);
+        assert!(done.status.success() && !err.contains("note:"), "{err}");
+    }
+    assert!(own.join("c").join("labels.png").is_file());
 }
