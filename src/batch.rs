@@ -641,10 +641,12 @@ impl Batch {
 
 /// Each input's output folder name: its [`stem`], or, where several
 /// inputs share a stem (`s1/img.png`, `s2/img.png`), the stem after as many
-/// of its parent folders' names as tell them apart (`s1_img`, `s2_img`),
-/// or, for inputs of one folder (`img.png`, `img.tif`), their whole names
-/// (`img_png`, `img_tif`). Names that still clash (a name so made that is
-/// another input's stem) are refused, every clash in one message.
+/// of its parent folders' names as tell them apart (`s1_img`, `s2_img`).
+/// Where two of them share a folder (`img.png`, `img.tif`), their whole
+/// names take the stem's place (`img_png`, `img_tif`; with another folder
+/// in the group, `s1_img_png`, `s2_img_png`, `s2_img_tif`). Names that
+/// still clash (a name so made that is another input's stem) are refused,
+/// every clash in one message.
 fn output_names(inputs: &[PathBuf]) -> Result<Vec<String>> {
     let mut by_stem: HashMap<String, Vec<usize>> = HashMap::new();
     for (i, p) in inputs.iter().enumerate() {
@@ -654,28 +656,15 @@ fn output_names(inputs: &[PathBuf]) -> Result<Vec<String>> {
     let mut clashes = Vec::new();
     for (name, group) in by_stem.iter().filter(|(_, g)| g.len() > 1) {
         let parents: Vec<Vec<String>> = group.iter().map(|&i| parent_names(&inputs[i])).collect();
-        let deepest = parents.iter().map(Vec::len).max().unwrap_or(0);
-        let depth = (1..=deepest).find(|&d| {
-            let named: HashSet<Vec<&String>> = parents
-                .iter()
-                .map(|p| p.iter().rev().take(d).collect())
-                .collect();
-            named.len() == group.len()
-        });
-        match depth {
-            Some(d) => {
-                for (&i, p) in group.iter().zip(&parents) {
-                    let mut parts: Vec<&str> = p.iter().rev().take(d).map(String::as_str).collect();
-                    parts.reverse();
-                    names[i] = format!("{}_{name}", parts.join("_"));
-                }
-            }
-            // One folder holds them all (`img.png`, `img.tif`): their
-            // whole names, the extension's dot made an underscore.
-            None => {
-                for &i in group {
-                    names[i] = whole_name(&inputs[i]);
-                }
+        let stems = vec![name.clone(); group.len()];
+        let wholes: Vec<String> = group.iter().map(|&i| whole_name(&inputs[i])).collect();
+        // The stems after their folders' names, or else the whole names.
+        let told_apart = [(stems, 1), (wholes, 0)]
+            .into_iter()
+            .find_map(|(own, from)| folder_prefixed(&parents, &own, from));
+        if let Some(told_apart) = told_apart {
+            for (&i, n) in group.iter().zip(told_apart) {
+                names[i] = n;
             }
         }
     }
@@ -699,6 +688,27 @@ fn output_names(inputs: &[PathBuf]) -> Result<Vec<String>> {
         )));
     }
     Ok(names)
+}
+
+/// `own` (one name per input of a group) after the fewest of the inputs'
+/// folders' names (`parents`, outermost first), at least `from`, that make
+/// them all differ (`s1_img`); `None` when even all of them do not.
+fn folder_prefixed(parents: &[Vec<String>], own: &[String], from: usize) -> Option<Vec<String>> {
+    let deepest = parents.iter().map(Vec::len).max().unwrap_or(0);
+    (from..=deepest).find_map(|d| {
+        let named: Vec<String> = parents
+            .iter()
+            .zip(own)
+            .map(|(p, own)| {
+                let mut parts: Vec<&str> = p.iter().rev().take(d).map(String::as_str).collect();
+                parts.reverse();
+                parts.push(own);
+                parts.join("_")
+            })
+            .collect();
+        let distinct: HashSet<&String> = named.iter().collect();
+        (distinct.len() == named.len()).then_some(named)
+    })
 }
 
 /// `path`'s file name with every dot an underscore (`img.nii.gz`:
@@ -797,6 +807,12 @@ mod tests {
         assert_eq!(
             output_names(&same).unwrap(),
             ["a_png", "a_tif", "c_png", "c_nii_gz"]
+        );
+        // two folders, one holding two of them: its folder and whole names
+        let mixed = [p("x/s1/img.png"), p("x/s2/img.png"), p("x/s2/img.tif")];
+        assert_eq!(
+            output_names(&mixed).unwrap(),
+            ["s1_img_png", "s2_img_png", "s2_img_tif"]
         );
         // a name so made that another input has as its stem: every clash named
         let clash = [
