@@ -100,7 +100,7 @@ pub trait Job {
     /// into the output directory (checked after the parameters, before any
     /// work), all or none of them.
     fn run(&self) -> Result<SegmentReport> {
-        self.refuse_replacing_inputs()?;
+        refuse_replacing_inputs(self)?;
         let t_load = Instant::now();
         let (input, truth) = self.load()?;
         let params = self.params_for(&input)?;
@@ -121,41 +121,41 @@ pub trait Job {
     }
 }
 
-/// The check that a job's outputs spare its inputs (off the public [`Job`] trait).
-trait SparesInputs: Job {
-    /// Refuses a run that would publish one of its outputs over its own
-    /// input file or its label file (`labels.png` segmented with `--out` set
-    /// to its own folder): the user's data would be replaced by the result.
-    fn refuse_replacing_inputs(&self) -> Result<()> {
-        let Source::File(input) = self.source() else {
-            return Ok(());
+/// Refuses a run of `job` that would publish one of its outputs over its
+/// own input file or its label file (`labels.png` segmented with `--out`
+/// set to its own folder): the user's data would be replaced by the
+/// result. An output is the same file as an input when both paths resolve
+/// to one (links, `.`/`..` and, where the file system ignores case, the
+/// stored spelling all resolved).
+fn refuse_replacing_inputs<J: Job + ?Sized>(job: &J) -> Result<()> {
+    let Source::File(input) = job.source() else {
+        return Ok(());
+    };
+    let written = job.outputs().files_for(J::THREE_D, input);
+    let inputs = [
+        (Some(input.as_path()), "input"),
+        (job.init_labels(), "label file"),
+    ];
+    for (file, what) in inputs {
+        let Some(full) = file.and_then(|f| f.canonicalize().ok()) else {
+            continue;
         };
-        // (an output folder that does not exist yet holds no input)
-        let Ok(out) = self.out().canonicalize() else {
-            return Ok(());
-        };
-        let written = self.outputs().files_for(Self::THREE_D, input);
-        for file in std::iter::once(input.as_path()).chain(self.init_labels()) {
-            let Ok(full) = file.canonicalize() else {
-                continue;
-            };
-            let name = full.file_name().and_then(|n| n.to_str());
-            if full.parent() == Some(out.as_path()) && name.is_some_and(|n| written.contains(&n)) {
-                return Err(Error::OutputDir {
-                    path: self.out().to_path_buf(),
-                    reason: format!(
-                        "the run would replace its input {} with an output of the same name; \
-                         choose another --out",
-                        file.display()
-                    ),
-                });
-            }
+        let replaced = written
+            .iter()
+            .any(|name| job.out().join(name).canonicalize().is_ok_and(|o| o == full));
+        if replaced {
+            return Err(Error::OutputDir {
+                path: job.out().to_path_buf(),
+                reason: format!(
+                    "the run would replace its {what} {} with an output of the same name; \
+                     choose another --out",
+                    file.unwrap_or(input).display()
+                ),
+            });
         }
-        Ok(())
     }
+    Ok(())
 }
-
-impl<J: Job + ?Sized> SparesInputs for J {}
 
 /// A phantom's true labels (phases by increasing mean).
 #[derive(Clone, Debug)]

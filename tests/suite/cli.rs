@@ -295,6 +295,24 @@ fn an_input_named_as_an_output_is_not_replaced() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(std::fs::read(&input).unwrap(), before);
+    // A label file given by another spelling of its path is spared too.
+    let labels = write_labels(d.path(), 40, 32, 1);
+    let out = d.path().join("sub");
+    std::fs::create_dir(&out).unwrap();
+    let spared = out.join("labels.png");
+    std::fs::rename(&labels, &spared).unwrap();
+    let roundabout = out.join("..").join("sub").join("labels.png");
+    let o = bin()
+        .args(["segment", "--quiet", "--init-labels"])
+        .arg(&roundabout)
+        .arg("--out")
+        .arg(&out)
+        .arg(&other)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("would replace its label file"), "{err}");
 }
 
 /// A two-phase image segmented into more phases than it holds: the phases
