@@ -506,9 +506,7 @@ fn main() -> ExitCode {
 /// A `--jobs` value: a whole number, at least 1 (clap's own message for 0
 /// is the library's "number would be zero for non-zero type").
 fn parse_jobs(s: &str) -> std::result::Result<std::num::NonZeroUsize, String> {
-    let n: usize = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("{s:?} is not a whole number"))?;
-    std::num::NonZeroUsize::new(n).ok_or_else(|| "at least 1 input runs at a time".into())
+    let expected = || format!("{s:?}: expected a whole number, at least 1");
+    let n: usize = s.trim().parse().map_err(|_| expected())?;
+    std::num::NonZeroUsize::new(n).ok_or_else(expected)
 }

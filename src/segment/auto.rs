@@ -302,3 +302,44 @@ pub fn thinnest_band<K: Raster>(complex: &Complex<K>, phases: &PhaseStats) -> f6
         .map(|(b, &c)| c as f64 / b.total())
         .fold(f64::INFINITY, f64::min)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn trial(phases: usize, converged: bool, stopped_at_cap: bool) -> PhaseTrial {
+        PhaseTrial {
+            phases,
+            accepted: true,
+            reason: None,
+            converged,
+            stopped_at_cap,
+            thinnest: f64::INFINITY,
+            data_energy: 0.0,
+            iterations: 10,
+        }
+    }
+
+    /// Only a trial that ran out of iterations is said to have: one whose
+    /// labels kept swapping did not converge either, but was not cut short.
+    #[test]
+    fn the_cap_warning_names_only_trials_stopped_at_the_cap() {
+        let choice = |trials| PhaseChoice {
+            phases: 3,
+            max_phases: 4,
+            trials,
+        };
+        let swapping = choice(vec![trial(2, true, false), trial(3, false, false)]);
+        assert_eq!(swapping.unconverged_warning(), None);
+        let capped = choice(vec![
+            trial(2, false, true),
+            trial(3, true, false),
+            trial(4, false, true),
+        ]);
+        let warning = capped.unconverged_warning().expect("a warning");
+        assert!(
+            warning.contains("with 2 phases at the iteration cap"),
+            "{warning}"
+        );
+    }
+}

@@ -79,3 +79,18 @@ fn short_number(v: f64) -> String {
         format!("{v:?}")
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parameters_print_as_typed() {
+        let said = |v: f64| SegmentError::Param("p", v, "r").to_string();
+        assert_eq!(said(0.0), "parameter p = 0 is out of range: r");
+        assert_eq!(said(-2.0), "parameter p = -2 is out of range: r");
+        assert_eq!(said(0.5), "parameter p = 0.5 is out of range: r");
+        assert_eq!(said(1e-9), "parameter p = 1e-9 is out of range: r");
+        assert_eq!(said(1e300), "parameter p = 1e300 is out of range: r");
+    }
+}
