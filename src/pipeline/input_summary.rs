@@ -54,9 +54,11 @@ impl InputSummary {
     /// `selection` of its file, whose loaded values map back to the file's
     /// by `map` (`None`: no file), from the run's `report`, the extremes
     /// of the outliers it clamped (loaded values; `None`: none) and its
-    /// final means by output value, `ordered_means`. The normalised means
-    /// are stretched over the range the segmentation saw, without the
-    /// outliers: one hot pixel would squeeze them all towards 0.
+    /// final means by output value, `ordered_means`. Loaded file values
+    /// (2D float and signed images) are stretched to the normalised means
+    /// over the range the segmentation saw, without the outliers it
+    /// clamped: one hot pixel would squeeze them all towards 0 (a volume
+    /// of such samples is loaded normalised already, over its whole range).
     pub(crate) fn new(
         (sample_type, colour, selection): (SampleType, Colour, Selection),
         map: Option<IntensityMap>,

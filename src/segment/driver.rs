@@ -1823,11 +1823,11 @@ impl<'a, K: Raster> Segmentation<'a, K> {
             .fold(0.0, |total, f| total + f.measure)
     }
 
-    /// Mesh label → output phase index, phases ordered by increasing mean
-    /// (empty phases last, in label order: the mean an empty phase keeps
-    /// for the flips is the mean of nothing, and ranked by it the empty
-    /// phases fell between the others, a two-phase result of ten asked
-    /// for writing the values 0 and 8).
+    /// Mesh label → output phase index, phases ordered by increasing mean,
+    /// empty phases last in label order (the mean an empty phase keeps for
+    /// the flips is the mean of nothing). The numbering is that of the
+    /// current state: while a phase is empty mid-run, the phases above it
+    /// shift down until it is re-seeded.
     pub fn phase_order(&self) -> Vec<u8> {
         let n = self.params.phases;
         let means = self.present_means();

@@ -183,7 +183,7 @@ mod tests {
     }
 
     /// An 8×8 image of white noise: 40 pairs three samples apart, too few
-    /// for a figure (it read 0.98 on such an image).
+    /// for a figure (this one read 0.36, another such image 0.98).
     #[test]
     fn tiny_images_have_no_figure() {
         let mut tiny = vec![0.5f32; 64];
