@@ -273,6 +273,59 @@ fn every_encoding_of_a_four_phase_volume_gives_the_same_labels() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
+/// A hot voxel beside a 16-bit volume's interface: its phases' measures
+/// (the partial-volume estimate, `phases.csv`) are those of the volume
+/// without it within a few voxels, since they read the clamped samples as
+/// the segmentation does (unclamped, the voxel counted as some 400 voxels
+/// of the bright phase).
+#[test]
+fn a_hot_voxel_leaves_a_volumes_measures_alone() {
+    use tiff::encoder::{colortype::Gray16, TiffEncoder};
+    let d = crate::cli::tmp();
+    let n = 32u32;
+    let measures = |hot: bool| {
+        let path = d.path().join(format!("v{hot}.tif"));
+        {
+            let mut enc = TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
+            for z in 0..n {
+                let slice: Vec<u16> = (0..n * n)
+                    .map(|i| {
+                        let (x, y) = (i % n, i / n);
+                        let inside = [x, y, z].iter().all(|&c| (8..24).contains(&c));
+                        let texture = ((x * 7 + y * 13 + z * 5) % 11) as u16;
+                        let at_edge = (x, y, z) == (6, 16, 16);
+                        if hot && at_edge {
+                            u16::MAX
+                        } else {
+                            20_000 + if inside { 180 } else { 70 } + texture
+                        }
+                    })
+                    .collect();
+                enc.write_image::<Gray16>(n, n, &slice).unwrap();
+            }
+        }
+        let out = d.path().join(format!("out{hot}"));
+        let o = crate::cli::bin()
+            .args(["segment3d", "--quiet", "--outputs", "phases", "--out"])
+            .arg(&out)
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let table = std::fs::read_to_string(out.join("phases.csv")).unwrap();
+        let pv: Vec<f64> = table
+            .lines()
+            .skip(1)
+            .map(|row| row.split(',').nth(2).unwrap().parse().unwrap())
+            .collect();
+        pv
+    };
+    let (clean, with_hot) = (measures(false), measures(true));
+    for (a, b) in clean.iter().zip(&with_hot) {
+        assert!((a - b).abs() < 5.0, "{clean:?} against {with_hot:?}");
+    }
+}
+
 /// A 16-bit volume's report gives its range and phase means in the file's
 /// units (levels 20070 and 20180 plus a little texture), as in 2D.
 #[test]
