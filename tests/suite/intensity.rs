@@ -273,6 +273,29 @@ fn every_encoding_of_a_four_phase_volume_gives_the_same_labels() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
+/// Writes a 16-bit TIFF stack of `n`³ voxels: a cube `cube` (a range of
+/// each coordinate) at 20180 in 20070, plus a little texture (0..=10), with
+/// voxel `hot` at 65535.
+fn save_textured_cube_u16(path: &Path, n: u32, cube: std::ops::Range<u32>, hot: Option<[u32; 3]>) {
+    use tiff::encoder::{colortype::Gray16, TiffEncoder};
+    let mut enc = TiffEncoder::new(std::fs::File::create(path).unwrap()).unwrap();
+    for z in 0..n {
+        let slice: Vec<u16> = (0..n * n)
+            .map(|i| {
+                let (x, y) = (i % n, i / n);
+                let inside = [x, y, z].iter().all(|c| cube.contains(c));
+                let texture = ((x * 7 + y * 13 + z * 5) % 11) as u16;
+                if hot == Some([x, y, z]) {
+                    u16::MAX
+                } else {
+                    20_000 + if inside { 180 } else { 70 } + texture
+                }
+            })
+            .collect();
+        enc.write_image::<Gray16>(n, n, &slice).unwrap();
+    }
+}
+
 /// A hot voxel beside a 16-bit volume's interface: its phases' measures
 /// (the partial-volume estimate, `phases.csv`) are those of the volume
 /// without it within a few voxels, since they read the clamped samples as
@@ -280,30 +303,10 @@ fn every_encoding_of_a_four_phase_volume_gives_the_same_labels() {
 /// of the bright phase).
 #[test]
 fn a_hot_voxel_leaves_a_volumes_measures_alone() {
-    use tiff::encoder::{colortype::Gray16, TiffEncoder};
     let d = crate::cli::tmp();
-    let n = 32u32;
     let measures = |hot: bool| {
         let path = d.path().join(format!("v{hot}.tif"));
-        {
-            let mut enc = TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
-            for z in 0..n {
-                let slice: Vec<u16> = (0..n * n)
-                    .map(|i| {
-                        let (x, y) = (i % n, i / n);
-                        let inside = [x, y, z].iter().all(|&c| (8..24).contains(&c));
-                        let texture = ((x * 7 + y * 13 + z * 5) % 11) as u16;
-                        let at_edge = (x, y, z) == (6, 16, 16);
-                        if hot && at_edge {
-                            u16::MAX
-                        } else {
-                            20_000 + if inside { 180 } else { 70 } + texture
-                        }
-                    })
-                    .collect();
-                enc.write_image::<Gray16>(n, n, &slice).unwrap();
-            }
-        }
+        save_textured_cube_u16(&path, 32, 8..24, hot.then_some([6, 16, 16]));
         let out = d.path().join(format!("out{hot}"));
         let o = crate::cli::bin()
             .args(["segment3d", "--quiet", "--outputs", "phases", "--out"])
@@ -330,24 +333,9 @@ fn a_hot_voxel_leaves_a_volumes_measures_alone() {
 /// units (levels 20070 and 20180 plus a little texture), as in 2D.
 #[test]
 fn a_16_bit_volume_reports_means_in_its_own_units() {
-    use tiff::encoder::{colortype::Gray16, TiffEncoder};
     let d = crate::cli::tmp();
-    let n = 12u32;
     let path = d.path().join("v16.tif");
-    {
-        let mut enc = TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
-        for z in 0..n {
-            let slice: Vec<u16> = (0..n * n)
-                .map(|i| {
-                    let (x, y) = (i % n, i / n);
-                    let inside = [x, y, z].iter().all(|&c| (3..9).contains(&c));
-                    let texture = ((x * 7 + y * 13 + z * 5) % 11) as u16;
-                    20_000 + if inside { 180 } else { 70 } + texture
-                })
-                .collect();
-            enc.write_image::<Gray16>(n, n, &slice).unwrap();
-        }
-    }
+    save_textured_cube_u16(&path, 12, 3..9, None);
     let out = d.path().join("out");
     let o = crate::cli::bin()
         .args(["segment3d", "--quiet", "--outputs", "report", "--out"])
