@@ -299,8 +299,8 @@ fn save_textured_cube_u16(path: &Path, n: u32, cube: std::ops::Range<u32>, hot: 
 /// A hot voxel beside a 16-bit volume's interface: its phases' measures
 /// (the partial-volume estimate, `phases.csv`) are those of the volume
 /// without it within a few voxels, since they read the clamped samples as
-/// the segmentation does (unclamped, the voxel counted as some 400 voxels
-/// of the bright phase).
+/// the segmentation does (unclamped, the voxel's fraction of the bright
+/// phase is (65535 − 20070)/110, hundreds of voxels, and the test fails).
 #[test]
 fn a_hot_voxel_leaves_a_volumes_measures_alone() {
     let d = crate::cli::tmp();
